@@ -1,0 +1,204 @@
+"""Flat-joint bonds in 2D (Potyondy 2012; thesis 2.2.2.4 and Table 4.2).
+
+The interface is a segment of length 2*Rbar normal to the line of centres, centred
+midway in the gap between the two surfaces, split into N equal elements. Along the
+interface (coordinate s on t = z x n) the gap is g(s) = g_c - theta*s, with
+g_c = d - d0 the opening at the centre since installation and theta the relative
+rotation of ball j w.r.t. ball i. Per unit length the interface pulls/pushes with
+k_n*t*g(s) (tension positive), so an element's normal force and moment follow from the
+integrals of g and g*s over the element (over its compressed part only once broken).
+That single integral gives F_n^e = k_n A_e g(s_e) and M = sum(F_n^e s_e) - k_n I theta
+as in the physics spec, and the exact compression-only response of broken elements.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from . import params as P
+
+MODE_TENSION = 1
+MODE_SHEAR = 2
+
+
+@njit(cache=True, inline="always")
+def _strip(gc, th, a, b, compressed_only):
+    """Integrals of g(s) and g(s)*s over [a, b] (restricted to g < 0 if asked)."""
+    if compressed_only:
+        if th == 0.0:
+            if gc >= 0.0:
+                return 0.0, 0.0
+        else:
+            root = gc / th
+            if th > 0.0:
+                a = max(a, root)
+            else:
+                b = min(b, root)
+            if b <= a:
+                return 0.0, 0.0
+    i0 = gc * (b - a) - th * (b * b - a * a) / 2.0
+    i1 = gc * (b * b - a * a) / 2.0 - th * (b * b * b - a * a * a) / 3.0
+    return i0, i1
+
+
+@njit(cache=True)
+def bond_forces(prm, step, pos, vel, omega, rad, stone, force, moment,
+                b_i, b_j, b_active, rbar, d0, gi, kn, ks, sigc, coh, tanphi, bmu,
+                theta, bmom, state, bfn, bfs,
+                l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
+                l_stress, l_n, eacc):
+    """Flat-joint forces, element failure (logged) and interface removal."""
+    dt = prm[P.DT]
+    t = prm[P.THICK]
+    ne = state.shape[1]
+    for b in range(b_i.shape[0]):
+        if not b_active[b]:
+            continue
+        i = b_i[b]
+        j = b_j[b]
+        dx = pos[j, 0] - pos[i, 0]
+        dy = pos[j, 1] - pos[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        nx = dx / d
+        ny = dy / d
+        tx = -ny
+        ty = nx
+        ai = rad[i] + 0.5 * (d - rad[i] - rad[j])     # centre -> interface centre
+        aj = d - ai
+        w = omega[i] * ai + omega[j] * aj
+        vt = (vel[j, 0] - vel[i, 0] - w * tx) * tx + (vel[j, 1] - vel[i, 1] - w * ty) * ty
+        theta[b] += (omega[j] - omega[i]) * dt
+        th = theta[b]
+        gc = d - d0[b]
+        le = 2.0 * rbar[b] / ne
+        ae = le * t
+        ie = t * le ** 3 / 12.0
+        ftot_n = 0.0
+        ftot_s = 0.0
+        mc = 0.0
+        nbonded = 0
+        for e in range(ne):
+            a = -rbar[b] + e * le
+            se = a + 0.5 * le
+            fs = bfs[b, e] - ks[b] * ae * vt * dt
+            if state[b, e]:
+                i0, i1 = _strip(gc, th, a, a + le, False)
+                fn = kn[b] * t * i0
+                sig = fn / ae
+                tau = abs(fs) / ae
+                mode = 0
+                if sig >= sigc[b]:
+                    mode = MODE_TENSION
+                elif tau >= coh[b] - sig * tanphi[b]:
+                    mode = MODE_SHEAR
+                if mode > 0:
+                    k = l_n[0]
+                    l_step[k] = step
+                    l_time[k] = prm[P.TIME]
+                    l_bond[k] = b
+                    l_elem[k] = e
+                    l_i[k] = i
+                    l_j[k] = j
+                    l_stone[k] = stone[i]
+                    l_mode[k] = mode
+                    l_x[k] = pos[i, 0] + ai * nx + se * tx
+                    l_y[k] = pos[i, 1] + ai * ny + se * ty
+                    l_stress[k] = sig if mode == MODE_TENSION else tau
+                    l_n[0] = k + 1
+                    state[b, e] = 0
+                    eacc[P.E_BREAKAGE] += (0.5 * fn * fn / (kn[b] * ae) + 0.5 * fs * fs / (ks[b] * ae)
+                                           + 0.5 * kn[b] * ie * th * th)
+                else:
+                    nbonded += 1
+            if not state[b, e]:
+                # broken: compression-only notional surfaces with Coulomb friction
+                i0, i1 = _strip(gc, th, a, a + le, True)
+                fn = kn[b] * t * i0
+                lim = bmu[b] * max(-fn, 0.0)
+                if abs(fs) > lim:
+                    eacc[P.E_FRICTION] += lim * (abs(fs) - lim) / (ks[b] * ae)
+                    fs = lim if fs > 0.0 else -lim
+            bfn[b, e] = fn
+            bfs[b, e] = fs
+            ftot_n += fn
+            ftot_s += fs
+            mc += kn[b] * t * i1
+        if nbonded == 0 and gc - abs(th) * rbar[b] > gi[b]:
+            b_active[b] = 0       # surfaces apart beyond the installation gap: remove
+            for e in range(ne):
+                bfn[b, e] = 0.0
+                bfs[b, e] = 0.0
+            bmom[b] = 0.0
+            continue
+        bmom[b] = mc
+        fx = -ftot_n * nx + ftot_s * tx          # force on j (tension pulls j to i)
+        fy = -ftot_n * ny + ftot_s * ty
+        force[j, 0] += fx
+        force[j, 1] += fy
+        force[i, 0] -= fx
+        force[i, 1] -= fy
+        moment[j] += mc - aj * ftot_s
+        moment[i] += -mc - ai * ftot_s
+
+
+@njit(cache=True)
+def bond_energy(pos, b_i, b_j, b_active, rbar, d0, kn, ks, theta, state, bfs, thick):
+    """Elastic energy stored in flat joints: int 0.5 k_n t g(s)^2 ds over loaded parts
+    plus 0.5 F_s^2 / (k_s A_e) per element."""
+    e_tot = 0.0
+    ne = state.shape[1]
+    for b in range(b_i.shape[0]):
+        if not b_active[b]:
+            continue
+        i = b_i[b]
+        j = b_j[b]
+        d = math.sqrt((pos[j, 0] - pos[i, 0]) ** 2 + (pos[j, 1] - pos[i, 1]) ** 2)
+        gc = d - d0[b]
+        th = theta[b]
+        le = 2.0 * rbar[b] / ne
+        for e in range(ne):
+            a = -rbar[b] + e * le
+            lo, hi = a, a + le
+            if not state[b, e]:
+                if th == 0.0:
+                    if gc >= 0.0:
+                        hi = lo
+                else:
+                    root = gc / th
+                    if th > 0.0:
+                        lo = max(lo, root)
+                    else:
+                        hi = min(hi, root)
+            if hi > lo:
+                # int (gc - th s)^2 ds = [gc^2 s - gc th s^2 + th^2 s^3 / 3]
+                fh = gc * gc * hi - gc * th * hi * hi + th * th * hi ** 3 / 3.0
+                fl = gc * gc * lo - gc * th * lo * lo + th * th * lo ** 3 / 3.0
+                e_tot += 0.5 * kn[b] * thick * (fh - fl)
+            e_tot += 0.5 * bfs[b, e] ** 2 / (ks[b] * le * thick)
+    return e_tot
+
+
+def find_bond_candidates(pos, rad, stone, alive, gap_factor):
+    """Pairs (i<j) of live balls of one stone (stone >= 0) whose surface gap is below
+    g_i = gap_factor * min(R_i, R_j) (Table 4.2: 0.4 * D_small / 2). O(N) via cells."""
+    from .neighbours import build_pairs
+    n = len(rad)
+    if n < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    skin = gap_factor * float(rad.max())
+    lo = pos.min(axis=0) - 1.0
+    hi = pos.max(axis=0) + 1.0
+    cap = 8 * n + 16
+    while True:
+        oi = np.zeros(cap, np.int32)
+        oj = np.zeros(cap, np.int32)
+        cnt = build_pairs(pos, rad, alive, np.full(n, -1, np.int32), skin,
+                          lo[0], lo[1], hi[0], hi[1], oi, oj)
+        if cnt >= 0:
+            break
+        cap = -cnt
+    oi, oj = oi[:cnt].astype(np.int64), oj[:cnt].astype(np.int64)
+    d = np.hypot(*(pos[oj] - pos[oi]).T)
+    gap = d - rad[oi] - rad[oj]
+    keep = (stone[oi] == stone[oj]) & (stone[oi] >= 0) & (gap < gap_factor * np.minimum(rad[oi], rad[oj]))
+    return oi[keep], oj[keep]

@@ -1,0 +1,57 @@
+"""Checkpoint: the whole Simulation state in one .npz, written atomically.
+
+Everything the kernels read is saved (ball/wall/clump arrays, both Verlet lists with their
+history, bonds, breakage log, counters, parameters, material table), so a restored run
+continues bit for bit.
+"""
+import json
+import os
+import tempfile
+
+import numpy as np
+
+from .state import Balls, Bonds, BreakLog, Clumps, Pairs, WallPairs, Walls
+
+_PARTS = (("balls", Balls, "b_"), ("walls", Walls, "w_"), ("clumps", Clumps, "c_"),
+          ("pairs", Pairs, "p_"), ("wpairs", WallPairs, "q_"), ("bonds", Bonds, "f_"),
+          ("log", BreakLog, "l_"))
+_ARRAYS = ("prm", "cnt", "eacc", "err", "lc")
+_META = ("skin", "domain", "n_elements", "_prepared")
+
+
+def save_state(path, sim):
+    data = {}
+    for attr, _, prefix in _PARTS:
+        data.update(getattr(sim, attr).to_dict(prefix))
+    for name in _ARRAYS:
+        data["s_" + name] = getattr(sim, name)
+    meta = {k: getattr(sim, k) for k in _META}
+    meta["lc_default"] = list(vars(sim._lc_default).values())  # dataclass fields in order
+    data["meta"] = np.array(json.dumps(meta))
+    d = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(dir=d, prefix=".ckpt-", suffix=".npz")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def load_state(path, sim):
+    from .materials import ContactMaterial
+    with np.load(path) as z:
+        d = {k: z[k] for k in z.files}
+    for attr, cls, prefix in _PARTS:
+        setattr(sim, attr, cls.from_dict(d, prefix))
+    for name in _ARRAYS:
+        setattr(sim, name, np.array(d["s_" + name]))
+    meta = json.loads(str(d["meta"]))
+    for k in _META:
+        v = meta[k]
+        setattr(sim, k, tuple(v) if isinstance(v, list) else v)
+    sim._lc_default = ContactMaterial(*meta["lc_default"])

@@ -1,0 +1,100 @@
+"""The fused stepping kernel: K steps of velocity Verlet inside numba, no Python per step.
+
+One step: half kick + drift (balls, clumps, walls) -> Verlet rebuild if any ball moved
+more than skin/2 since the last build (wall motion counted) -> weight -> ball-ball
+contacts -> flat joints -> ball-wall contacts -> clump sums -> local damping + half kick
+-> guards. Returns early with a status code when a guard trips (after the full step).
+"""
+from numba import njit
+
+from . import params as P
+from .bonds import bond_forces
+from .clumps import gather_clumps, place_pebbles
+from .contacts import pair_forces
+from .integrate import critical_dt, first_half, reset_forces, second_half
+from .neighbours import grow_rows, rebuild
+from .walls import move_walls, wall_forces
+
+
+@njit(cache=True)
+def run_steps(nsteps, prm, cnt, err, eacc, lc,
+              pos, vel, omega, rad, mass, inertia, minv, iinv, force, moment,
+              stone, mat, fix, clump, offset, alive, pos0, fext,
+              seg, wvel, womega, centre, wforce, wmoment, wmat, link,
+              cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment,
+              p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n,
+              w_i, w_s, w_h, w_fn, w_fs, w_n,
+              b_i, b_j, b_active, rbar, d0, gi, bkn, bks, sigc, coh, tanphi, bmu,
+              theta, bmom, state, bfn, bfs,
+              l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
+              l_stress, l_n):
+    """Advance up to ``nsteps`` steps. cnt = [step, neighbour builds, force rebuild flag];
+    prm[P.TIME] is advanced. Lists that needed more room are reallocated here, so the
+    pair and wall-pair arrays are returned: (status, steps done, p_i, p_j, p_h, p_bond,
+    p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)."""
+    half_skin2 = (0.5 * prm[P.SKIN]) ** 2
+    for k in range(nsteps):
+        dt = prm[P.DT]
+        dt_next = dt
+        dmax2 = first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
+                           pos0, cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia,
+                           cheld)
+        place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
+        prm[P.WALL_TRAVEL] += move_walls(seg, wvel, womega, centre, dt)   # wall travel since build
+        for i in range(pos.shape[0]):
+            if clump[i] >= 0 and alive[i]:
+                dx = pos[i, 0] - pos0[i, 0]
+                dy = pos[i, 1] - pos0[i, 1]
+                dmax2 = max(dmax2, dx * dx + dy * dy)
+        if cnt[2] > 0 or (dmax2 ** 0.5 + prm[P.WALL_TRAVEL]) ** 2 > half_skin2:
+            while True:
+                st, need = rebuild(pos, rad, alive, clump, pos0, prm[P.SKIN], prm[P.XMIN],
+                                   prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], p_i, p_j, p_h,
+                                   p_bond, p_n, b_i, b_j, seg, w_i, w_s, w_h, w_n)
+                if st == 0:
+                    break
+                cap = need + need // 4 + 16       # grow the list in place of the caller's
+                if st == 1:
+                    p_i = grow_rows(p_i, cap)
+                    p_j = grow_rows(p_j, cap)
+                    p_h = grow_rows(p_h, cap)
+                    p_bond = grow_rows(p_bond, cap)
+                    p_fn = grow_rows(p_fn, cap)
+                    p_fs = grow_rows(p_fs, cap)
+                else:
+                    w_i = grow_rows(w_i, cap)
+                    w_s = grow_rows(w_s, cap)
+                    w_h = grow_rows(w_h, cap)
+                    w_fn = grow_rows(w_fn, cap)
+                    w_fs = grow_rows(w_fs, cap)
+            cnt[1] += 1
+            cnt[2] = 0
+            prm[P.WALL_TRAVEL] = 0.0
+            if prm[P.AUTO_DT] > 0.0 or prm[P.DSCALE] > 0.0:
+                dtc = critical_dt(prm, rad, mass, inertia, minv, iinv, mat, clump, alive,
+                                  p_i, p_j, p_n[0], w_i, w_s, w_n[0], wmat, b_i, b_j,
+                                  b_active, rbar, bkn, bks, lc)
+                if prm[P.AUTO_DT] > 0.0 and dtc < 1.0e30:
+                    dt_next = prm[P.DT_SAFETY] * dtc   # applies from the next step
+        cnt[0] += 1
+        prm[P.TIME] += dt
+        reset_forces(prm[P.GX], prm[P.GY], mass, fext, force, moment, clump, alive)
+        pair_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
+                    p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n[0], b_active, lc, eacc)
+        bond_forces(prm, cnt[0], pos, vel, omega, rad, stone, force, moment,
+                    b_i, b_j, b_active, rbar, d0, gi, bkn, bks, sigc, coh, tanphi, bmu,
+                    theta, bmom, state, bfn, bfs,
+                    l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
+                    l_stress, l_n, eacc)
+        wall_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
+                    seg, wvel, womega, centre, wmat, link, wforce, wmoment,
+                    w_i, w_s, w_h, w_fn, w_fs, w_n[0], lc, eacc)
+        gather_clumps(prm[P.GX], prm[P.GY], pos, force, moment, clump, alive, cpos, cmass,
+                      cforce, cmoment)
+        st = second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
+                         cvel, comega, cforce, cmoment, cmass, cinertia, cheld, eacc, err)
+        place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
+        prm[P.DT] = dt_next
+        if st != P.OK:
+            return (st, k + 1, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)
+    return (P.OK, nsteps, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)

@@ -1,0 +1,210 @@
+"""Velocity Verlet (LAMMPS order: half kick, drift | forces | half kick), PFC local
+damping, guards, critical timestep and density scaling.
+
+Velocity-dependent forces (dashpots, local damping) see the half-step velocity, as in
+both LAMMPS's velocity Verlet and PFC's central-difference cycle.
+Local damping (PFC): F_d = -alpha*|F|*sign(v) per degree of freedom, applied in the
+second half kick; the stored ``force`` is the net force including it.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from . import params as P
+from .contacts import LC_E, LC_KAPPA
+
+
+@njit(cache=True)
+def first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive, pos0,
+               cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia, cheld):
+    """Half kick + drift for free balls and free clumps; held dofs keep their velocity.
+    Returns the largest squared ball displacement since the last neighbour build."""
+    h = 0.5 * dt
+    dmax2 = 0.0
+    for i in range(pos.shape[0]):
+        if not alive[i] or clump[i] >= 0:
+            continue
+        f = fix[i]
+        if not (f & 1):
+            vel[i, 0] += h * force[i, 0] * minv[i]
+        if not (f & 2):
+            vel[i, 1] += h * force[i, 1] * minv[i]
+        if not (f & 4):
+            omega[i] += h * moment[i] * iinv[i]
+        pos[i, 0] += dt * vel[i, 0]
+        pos[i, 1] += dt * vel[i, 1]
+    for c in range(cpos.shape[0]):
+        if not cheld[c]:
+            cvel[c, 0] += h * cforce[c, 0] / cmass[c]
+            cvel[c, 1] += h * cforce[c, 1] / cmass[c]
+            comega[c] += h * cmoment[c] / cinertia[c]
+        cpos[c, 0] += dt * cvel[c, 0]
+        cpos[c, 1] += dt * cvel[c, 1]
+        ctheta[c] += dt * comega[c]
+    for i in range(pos.shape[0]):
+        if alive[i]:
+            dx = pos[i, 0] - pos0[i, 0]
+            dy = pos[i, 1] - pos0[i, 1]
+            dmax2 = max(dmax2, dx * dx + dy * dy)
+    return dmax2
+
+
+@njit(cache=True)
+def reset_forces(gx, gy, mass, fext, force, moment, clump, alive):
+    """Forces start each step at weight + external load (pebbles: the clump carries the
+    weight, the load goes through the pebble to the clump)."""
+    for i in range(mass.shape[0]):
+        if alive[i] and clump[i] < 0:
+            force[i, 0] = mass[i] * gx + fext[i, 0]
+            force[i, 1] = mass[i] * gy + fext[i, 1]
+        elif alive[i]:
+            force[i, 0] = fext[i, 0]
+            force[i, 1] = fext[i, 1]
+        else:
+            force[i, 0] = 0.0
+            force[i, 1] = 0.0
+        moment[i] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _damped(f, v, alpha):
+    """PFC local damping: F - alpha |F| sign(v)."""
+    if v > 0.0:
+        return f - alpha * abs(f)
+    if v < 0.0:
+        return f + alpha * abs(f)
+    return f
+
+
+@njit(cache=True)
+def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
+                cvel, comega, cforce, cmoment, cmass, cinertia, cheld, eacc, err):
+    """Local damping + half kick; then the guards. Returns a status code and puts the
+    offending ball id and value in err[0], err[1]."""
+    dt = prm[P.DT]
+    h = 0.5 * dt
+    alpha = prm[P.ALPHA]
+    el = 0.0
+    for i in range(pos.shape[0]):
+        if not alive[i] or clump[i] >= 0:
+            continue
+        f = fix[i]
+        if alpha > 0.0:
+            fx = _damped(force[i, 0], vel[i, 0], alpha)
+            fy = _damped(force[i, 1], vel[i, 1], alpha)
+            mz = _damped(moment[i], omega[i], alpha)
+            el -= ((fx - force[i, 0]) * vel[i, 0] + (fy - force[i, 1]) * vel[i, 1]
+                   + (mz - moment[i]) * omega[i]) * dt
+            force[i, 0] = fx
+            force[i, 1] = fy
+            moment[i] = mz
+        if not (f & 1):
+            vel[i, 0] += h * force[i, 0] * minv[i]
+        if not (f & 2):
+            vel[i, 1] += h * force[i, 1] * minv[i]
+        if not (f & 4):
+            omega[i] += h * moment[i] * iinv[i]
+    alpha = prm[P.ALPHA_CLUMP]
+    for c in range(cvel.shape[0]):
+        if cheld[c]:
+            continue
+        if alpha > 0.0:
+            fx = _damped(cforce[c, 0], cvel[c, 0], alpha)
+            fy = _damped(cforce[c, 1], cvel[c, 1], alpha)
+            mz = _damped(cmoment[c], comega[c], alpha)
+            el -= ((fx - cforce[c, 0]) * cvel[c, 0] + (fy - cforce[c, 1]) * cvel[c, 1]
+                   + (mz - cmoment[c]) * comega[c]) * dt
+            cforce[c, 0] = fx
+            cforce[c, 1] = fy
+            cmoment[c] = mz
+        cvel[c, 0] += h * cforce[c, 0] / cmass[c]
+        cvel[c, 1] += h * cforce[c, 1] / cmass[c]
+        comega[c] += h * cmoment[c] / cinertia[c]
+    eacc[P.E_LOCAL] += el
+    return guards(prm, pos, vel, omega, alive, err)
+
+
+@njit(cache=True)
+def guards(prm, pos, vel, omega, alive, err):
+    """NaN/Inf, runaway speed, ball outside the domain -> status code (params.py)."""
+    vmax2 = prm[P.VMAX] ** 2
+    for i in range(pos.shape[0]):
+        if not alive[i]:
+            continue
+        s = pos[i, 0] + pos[i, 1] + vel[i, 0] + vel[i, 1] + omega[i]
+        if not math.isfinite(s):
+            err[0] = i
+            err[1] = s
+            return P.NAN_FOUND
+        v2 = vel[i, 0] ** 2 + vel[i, 1] ** 2
+        if v2 > vmax2:
+            err[0] = i
+            err[1] = math.sqrt(v2)
+            return P.RUNAWAY
+        if (pos[i, 0] < prm[P.XMIN] or pos[i, 0] > prm[P.XMAX]
+                or pos[i, 1] < prm[P.YMIN] or pos[i, 1] > prm[P.YMAX]):
+            err[0] = i
+            err[1] = pos[i, 0] if (pos[i, 0] < prm[P.XMIN] or pos[i, 0] > prm[P.XMAX]) else pos[i, 1]
+            return P.LEFT_DOMAIN
+    return P.OK
+
+
+@njit(cache=True)
+def critical_dt(prm, rad, mass, inertia, minv, iinv, mat, clump, alive, p_i, p_j, npair,
+                w_i, w_s, nwp, wmat, b_i, b_j, b_active, rbar, bkn, bks, lc):
+    """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) over every pair of the Verlet
+    lists (touching or about to touch: conservative until the next rebuild) and bonds.
+    With density scaling, inertial masses are raised to k_tr*(dt/f)^2 instead (never
+    lowered below the real mass: PFC scales both ways; we only add inertia)."""
+    n = rad.shape[0]
+    t = prm[P.THICK]
+    hooke = int(prm[P.LAW]) == P.LAW_HOOKE
+    ktr = np.zeros(n)
+    krot = np.zeros(n)
+    for p in range(npair):
+        i = p_i[p]
+        j = p_j[p]
+        if hooke:
+            kn = prm[P.H_KN]
+            ks = prm[P.H_KT]
+        else:
+            kn = 2.0 * min(rad[i], rad[j]) * t * lc[mat[i], mat[j], LC_E] / (rad[i] + rad[j])
+            ks = kn / lc[mat[i], mat[j], LC_KAPPA]
+        ktr[i] += kn + ks
+        ktr[j] += kn + ks
+        krot[i] += ks * rad[i] ** 2
+        krot[j] += ks * rad[j] ** 2
+    for q in range(nwp):
+        i = w_i[q]
+        if hooke:
+            kn = prm[P.H_KN]
+            ks = prm[P.H_KT]
+        else:
+            kn = 2.0 * t * lc[wmat[w_s[q]], mat[i], LC_E]
+            ks = kn / lc[wmat[w_s[q]], mat[i], LC_KAPPA]
+        ktr[i] += kn + ks
+        krot[i] += ks * rad[i] ** 2
+    for b in range(b_i.shape[0]):
+        if not b_active[b]:
+            continue
+        a = 2.0 * rbar[b] * t
+        kn = bkn[b] * a
+        ks = bks[b] * a
+        kb = bkn[b] * t * (2.0 * rbar[b]) ** 3 / 12.0
+        for i in (b_i[b], b_j[b]):
+            ktr[i] += kn + ks
+            krot[i] += kb + ks * rad[i] ** 2
+    f = prm[P.DT_SAFETY]
+    dtc = 1.0e30
+    for i in range(n):
+        if not alive[i] or ktr[i] == 0.0:
+            continue
+        if prm[P.DSCALE] > 0.0 and clump[i] < 0:
+            s2 = (prm[P.DT] / f) ** 2
+            minv[i] = 1.0 / max(mass[i], ktr[i] * s2)
+            iinv[i] = 1.0 / max(inertia[i], krot[i] * s2)
+        dtc = min(dtc, math.sqrt(1.0 / (minv[i] * ktr[i])))
+        if krot[i] > 0.0:
+            dtc = min(dtc, math.sqrt(1.0 / (iinv[i] * krot[i])))
+    return dtc

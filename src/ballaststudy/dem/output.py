@@ -1,0 +1,84 @@
+"""Compute-like measurements: pure functions of a Simulation's state (never change it).
+They are bound as Simulation methods."""
+import numpy as np
+
+from . import params as P
+from .energy import energies  # noqa: F401  (re-exported as a Simulation method)
+
+
+def wall_force(sim, ids=None):
+    """Force exerted by the balls on each segment [N] (rows = ``ids`` or all)."""
+    f = sim.walls.force
+    return f.copy() if ids is None else f[ids].copy()
+
+
+def wall_moment(sim, ids=None):
+    m = sim.walls.moment
+    return m.copy() if ids is None else m[ids].copy()
+
+
+def clump_force(sim, cid):
+    """(force [N], moment about the centre of mass [N m]) of clump ``cid`` from the last
+    step: weight + contacts (local damping excluded for held clumps, which are not
+    damped)."""
+    return sim.clumps.force[cid].copy(), float(sim.clumps.moment[cid])
+
+
+def contact_list(sim):
+    """Ball-ball and ball-wall contacts with a force: dict of arrays i, j (j = -1 - segment
+    for walls), force on j (for walls: on the ball) fx, fy, contact point x, y."""
+    b = sim.balls
+    out = []
+    pr = sim.pairs
+    k = np.nonzero((pr.fn[: pr.n[0]] != 0) | (pr.fs[: pr.n[0]] != 0))[0]
+    i, j = pr.i[k], pr.j[k]
+    d = b.pos[j] - b.pos[i]
+    dist = np.hypot(*d.T)
+    n = d / dist[:, None]
+    t = np.column_stack([-n[:, 1], n[:, 0]])
+    f = pr.fn[k, None] * n + pr.fs[k, None] * t
+    delta = b.rad[i] + b.rad[j] - dist
+    cp = b.pos[i] + (b.rad[i] - 0.5 * delta)[:, None] * n
+    out.append((i, j, f, cp))
+    wp = sim.wpairs
+    k = np.nonzero((wp.fn[: wp.n[0]] != 0) | (wp.fs[: wp.n[0]] != 0))[0]
+    i, s = wp.i[k], wp.s[k]
+    seg = sim.walls.seg[s]
+    e = seg[:, 2:] - seg[:, :2]
+    u = np.clip(((b.pos[i] - seg[:, :2]) * e).sum(1) / (e * e).sum(1), 0, 1)
+    cp = seg[:, :2] + u[:, None] * e
+    n = b.pos[i] - cp
+    n /= np.hypot(*n.T)[:, None]
+    t = np.column_stack([-n[:, 1], n[:, 0]])
+    f = wp.fn[k, None] * n + wp.fs[k, None] * t
+    out.append((i, -1 - s, f, cp))
+    cat = [np.concatenate(a) for a in zip(*out)]
+    return dict(i=cat[0], j=cat[1], fx=cat[2][:, 0], fy=cat[2][:, 1], x=cat[3][:, 0],
+                y=cat[3][:, 1])
+
+
+def bond_list(sim):
+    """Flat joints: i, j, active, per-element state (1 bonded) / normal force (tension +) /
+    shear force, bending moment on j, accumulated relative rotation."""
+    bd = sim.bonds
+    return dict(i=bd.i.copy(), j=bd.j.copy(), active=bd.active.copy(), state=bd.state.copy(),
+                fn=bd.fn.copy(), fs=bd.fs.copy(), moment=bd.moment.copy(),
+                theta=bd.theta.copy())
+
+
+def breakages(sim):
+    """Breakage log: step, time, bond, elem, i, j, stone, mode ('tension'|'shear'),
+    x, y, stress [Pa]."""
+    lg = sim.log
+    n = int(lg.n[0])
+    d = {k: getattr(lg, k)[:n].copy() for k in
+         ("step", "time", "bond", "elem", "i", "j", "stone", "x", "y", "stress")}
+    d["mode"] = np.array(["tension" if m == 1 else "shear" for m in lg.mode[:n]], dtype=object)
+    return d
+
+
+def inertial_number(shear_rate, d, rho, p):
+    """I = gamma_dot * d * sqrt(rho / p): quasi-static while I << 1e-3."""
+    return shear_rate * d * np.sqrt(rho / p)
+
+

@@ -1,0 +1,63 @@
+"""Scalar run parameters packed in one float64 array (``prm``) for the numba kernels.
+
+Kernels never read config or globals except these integer index constants, which numba
+freezes at compile time. The Python side (``Simulation``) fills the array.
+"""
+import numpy as np
+
+DT = 0            # timestep [s]
+GX = 1            # gravity x [m/s^2]
+GY = 2            # gravity y [m/s^2]
+ALPHA = 3         # PFC local damping coefficient for free balls [-]
+ALPHA_CLUMP = 4   # local damping coefficient for clumps [-]
+THICK = 5         # out-of-plane thickness t [m]
+SKIN = 6          # Verlet skin [m]
+LAW = 7           # contact law: 0 = PFC linear + dashpots, 1 = LAMMPS gran/hooke/history
+VMAX = 8          # runaway guard: max speed [m/s]
+XMIN = 9          # domain (ball centres must stay inside) [m]
+YMIN = 10
+XMAX = 11
+YMAX = 12
+H_KN = 13         # hooke/history law: kn [N/m]
+H_KT = 14         # kt [N/m]
+H_GN = 15         # gamma_n [1/s]
+H_GT = 16         # gamma_t [1/s]
+H_MU = 17         # mu [-]
+AUTO_DT = 18      # 1 = recompute dt = f*dt_crit at every neighbour rebuild
+DT_SAFETY = 19    # f [-]
+DSCALE = 20       # 1 = density scaling (inertial masses set so that dt_crit = dt/f)
+TIME = 21         # simulated time [s]
+TRACK_ENERGY = 22  # 1 = accumulate dissipated energies
+WALL_TRAVEL = 23  # wall endpoint travel since the last neighbour build [m]
+NPRM = 24
+
+LAW_PFC = 0
+LAW_HOOKE = 1
+
+# energy accumulator slots (``energy_acc`` array)
+E_DASHPOT = 0     # work dissipated by contact dashpots [J]
+E_FRICTION = 1    # work dissipated by Coulomb slip (contacts and broken FJ elements) [J]
+E_LOCAL = 2       # work dissipated by local damping [J]
+E_BREAKAGE = 3    # strain energy released when flat-joint elements break [J]
+E_WALLS = 4       # work done on balls by moving walls / velocity-controlled bodies [J]
+NENERGY = 6
+
+# run-status codes returned by the stepping kernel
+OK = 0
+NEED_PAIR_CAPACITY = 1
+NEED_WALL_CAPACITY = 2
+NAN_FOUND = 3
+RUNAWAY = 4
+LEFT_DOMAIN = 5
+STATUS_TEXT = {NAN_FOUND: "NaN/Inf in ball state", RUNAWAY: "runaway velocity",
+               LEFT_DOMAIN: "ball left the domain"}
+
+
+def new_params():
+    p = np.zeros(NPRM)
+    p[THICK] = 1.0
+    p[VMAX] = 1.0e3
+    p[DT_SAFETY] = 0.8
+    p[AUTO_DT] = 1.0
+    p[TRACK_ENERGY] = 1.0
+    return p

@@ -1,0 +1,464 @@
+"""The ``Simulation`` object: owns the state arrays, runs K steps at a time inside numba,
+calls the rig's callback between chunks, checks the guards, saves/restores checkpoints.
+
+Typical use (SI units)::
+
+    sim = Simulation(thickness=1.0, gravity=(0, -1000.0), damping=0.7)
+    ids = sim.add_balls(x, y, r, density=2950.0, stone_id=s, material_id=0)
+    bottom = sim.add_wall([(0, 0), (0.5, 0)], segments=10)
+    sim.install_flat_joints({0: FlatJointMaterial.hard()})
+    sim.run(10000, callback=servo, every=100)
+    sim.wall_force(bottom).sum(axis=0)
+"""
+import numpy as np
+
+from . import output
+from . import params as P
+from .bonds import find_bond_candidates
+from .checkpoint import load_state, save_state
+from .clumps import mass_properties, place_pebbles
+from .contacts import LC_E, LC_KAPPA, LC_NCOL
+from .engine import run_steps
+from .integrate import critical_dt, reset_forces
+from .materials import ContactMaterial, FlatJointMaterial
+from .neighbours import rebuild
+from .state import Balls, Bonds, BreakLog, Clumps, Pairs, WallPairs, Walls
+
+
+class SimulationError(RuntimeError):
+    """A guard stopped the run (NaN/Inf, runaway velocity, ball outside the domain)."""
+
+
+class Simulation:
+    """2D DEM model in PFC2D conventions (disks of thickness t, forces per thickness t).
+
+    Parameters
+    ----------
+    thickness : out-of-plane thickness t [m] (PFC2D: 1 m).
+    gravity : gravity vector [m/s^2].
+    damping : PFC local damping alpha for balls (0.7 = PFC material-genesis default).
+    clump_damping : local damping for clumps (default: same as ``damping``).
+    dt : fixed timestep [s]; None = automatic, dt = dt_safety * dt_crit recomputed at
+        every neighbour rebuild.
+    dt_safety : the factor f of the automatic timestep.
+    skin : Verlet skin [m]; None = 0.5 * largest radius at the first run.
+    domain : (xmin, ymin, xmax, ymax) ball centres must stay inside; None = bounding box
+        of balls and walls at the first run, enlarged by half its size on every side.
+    law : "pfc" (linear + dashpots, the engine's law) or "hooke" (LAMMPS
+        gran/hooke/history, for the benchmark; then pass ``hooke=dict(kn, kt, gamma_n,
+        gamma_t, mu)``).
+    n_elements : flat-joint elements per interface N (thesis N_r = 1).
+    vmax : runaway guard [m/s].
+    density_scaling : raise inertial masses so that the given ``dt`` is stable
+        (quasi-static stages only; report ``inertial_number``).
+    track_energy : accumulate dissipated energies (small cost).
+    """
+
+    def __init__(self, thickness=1.0, gravity=(0.0, -9.81), damping=0.0, clump_damping=None,
+                 dt=None, dt_safety=0.8, skin=None, domain=None, law="pfc", hooke=None,
+                 n_elements=1, vmax=1.0e3, density_scaling=False, track_energy=True):
+        self.prm = P.new_params()
+        p = self.prm
+        p[P.THICK] = thickness
+        p[P.GX], p[P.GY] = gravity
+        p[P.ALPHA] = damping
+        p[P.ALPHA_CLUMP] = damping if clump_damping is None else clump_damping
+        p[P.DT_SAFETY] = dt_safety
+        p[P.AUTO_DT] = 0.0 if dt is not None else 1.0
+        p[P.DT] = dt if dt is not None else 0.0
+        p[P.VMAX] = vmax
+        p[P.DSCALE] = 1.0 if density_scaling else 0.0
+        p[P.TRACK_ENERGY] = 1.0 if track_energy else 0.0
+        if density_scaling and dt is None:
+            raise ValueError("density_scaling needs a fixed dt")
+        if law not in ("pfc", "hooke"):
+            raise ValueError(f"law must be 'pfc' or 'hooke', got {law!r}")
+        p[P.LAW] = P.LAW_HOOKE if law == "hooke" else P.LAW_PFC
+        if law == "hooke":
+            h = dict(hooke or {})
+            p[P.H_KN], p[P.H_KT] = h["kn"], h["kt"]
+            p[P.H_GN], p[P.H_GT], p[P.H_MU] = h["gamma_n"], h["gamma_t"], h["mu"]
+        self.skin = skin
+        self.domain = domain
+        self.n_elements = int(n_elements)
+        self.balls = Balls()
+        self.walls = Walls()
+        self.clumps = Clumps()
+        self.pairs = Pairs.empty(64)
+        self.wpairs = WallPairs.empty(64)
+        self.bonds = self._empty_bonds()
+        self.log = BreakLog()
+        self.cnt = np.array([0, 0, 1], np.int64)      # step, neighbour builds, rebuild flag
+        self.eacc = np.zeros(P.NENERGY)
+        self.err = np.zeros(2)
+        self.lc = np.zeros((1, 1, LC_NCOL))
+        self.set_contact_material(ContactMaterial())
+        self._prepared = False
+
+    # ------------------------------------------------------------------ building
+    def _empty_bonds(self):
+        b = Bonds()
+        ne = self.n_elements
+        b.state = np.zeros((0, ne), np.uint8)
+        b.fn = np.zeros((0, ne))
+        b.fs = np.zeros((0, ne))
+        return b
+
+    def set_contact_material(self, cm, mat_a=None, mat_b=None):
+        """Linear-contact parameters for materials (a, b) (symmetric); without ids: for
+        every pair of materials. Walls use ``Walls.mat`` ids from the same table."""
+        if mat_a is None:
+            self._lc_default = cm
+            self.lc[:, :] = cm.row()
+            return
+        self._ensure_materials(max(mat_a, mat_b) + 1)
+        self.lc[mat_a, mat_b] = cm.row()
+        self.lc[mat_b, mat_a] = cm.row()
+
+    def _ensure_materials(self, n):
+        if self.lc.shape[0] < n:
+            d = self._lc_default
+            lc = np.empty((n, n, LC_NCOL))
+            lc[:, :] = d.row()
+            k = self.lc.shape[0]
+            lc[:k, :k] = self.lc
+            self.lc = lc
+
+    def add_balls(self, x, y, r, density, stone_id=-1, material_id=0, vx=0.0, vy=0.0,
+                  omega=0.0):
+        """Add disks (arrays or scalars); returns their ids. m = rho*pi*R^2*t, I = m R^2/2."""
+        x, y, r = (np.atleast_1d(np.asarray(a, float)) for a in (x, y, r))
+        k = len(x)
+        t = self.prm[P.THICK]
+        m = np.broadcast_to(np.asarray(density, float), (k,)) * np.pi * r ** 2 * t
+        inertia = 0.5 * m * r ** 2
+        mat = np.broadcast_to(np.asarray(material_id), (k,))
+        self._ensure_materials(int(mat.max()) + 1 if k else 1)
+        ids = self.balls.append(
+            pos=np.column_stack([x, y]), vel=np.column_stack(np.broadcast_arrays(vx, vy, x)[:2]),
+            omega=omega, rad=r, mass=m, inertia=inertia, minv=1.0 / m, iinv=1.0 / inertia,
+            stone=stone_id, mat=mat, fix=0, clump=-1, alive=1, pos0=np.column_stack([x, y]))
+        self._touch()
+        return ids
+
+    def add_wall(self, points, segments=1, material_id=0, closed=False):
+        """Polyline wall through ``points``; each edge split into ``segments`` equal
+        segments (so a rig can read forces per segment). Returns the segment ids.
+        Every segment rotates about the first point unless ``set_wall_velocity`` says."""
+        pts = np.asarray(points, float)
+        if closed:
+            pts = np.vstack([pts, pts[:1]])
+        segs = []
+        for a, b in zip(pts[:-1], pts[1:]):
+            u = np.linspace(0.0, 1.0, segments + 1)[:, None]
+            q = a + u * (b - a)
+            segs += [np.r_[q[s], q[s + 1]] for s in range(segments)]
+        segs = np.array(segs)
+        k0, k = len(self.walls), len(segs)
+        link = np.column_stack([np.arange(k0 - 1, k0 + k - 1), np.arange(k0 + 1, k0 + k + 1)])
+        if closed:
+            link[0, 0], link[-1, 1] = k0 + k - 1, k0
+        else:
+            link[0, 0], link[-1, 1] = -1, -1
+        ids = self.walls.append(seg=segs, centre=np.broadcast_to(pts[0], (len(segs), 2)),
+                                mat=material_id, link=link)
+        self._ensure_materials(material_id + 1)
+        self._touch()
+        return ids
+
+    def set_wall_velocity(self, ids, vel=(0.0, 0.0), omega=0.0, centre=None):
+        """Kinematic motion of segments ``ids``: translation ``vel`` and rotation
+        ``omega`` about ``centre`` (a point moving with the wall)."""
+        self.walls.vel[ids] = vel
+        self.walls.omega[ids] = omega
+        if centre is not None:
+            self.walls.centre[ids] = centre
+
+    def add_clump(self, x, y, r, density, held=False, material_id=0, stone_id=-1,
+                  mass=None, inertia=None, vel=(0.0, 0.0), omega=0.0):
+        """Rigid clump of pebbles (x, y, r). Mass properties from pebble sums unless
+        ``mass``/``inertia`` are given (see clumps.py). Returns the clump id."""
+        x, y, r = (np.atleast_1d(np.asarray(a, float)) for a in (x, y, r))
+        m, cx, cy, ii = mass_properties(x, y, r, density, self.prm[P.THICK])
+        m = m if mass is None else mass
+        ii = ii if inertia is None else inertia
+        cid = self.clumps.append(pos=(cx, cy), vel=vel, omega=omega, mass=m, inertia=ii,
+                                 held=1 if held else 0)
+        ids = self.add_balls(x, y, r, density, stone_id=stone_id, material_id=material_id)
+        self.balls.clump[ids] = cid
+        self.balls.offset[ids] = np.column_stack([x - cx, y - cy])
+        self.balls.minv[ids] = 1.0 / m        # dashpot effective mass = clump mass
+        b, c = self.balls, self.clumps
+        place_pebbles(b.pos, b.vel, b.omega, b.clump, b.offset, b.alive, c.pos, c.vel,
+                      c.omega, c.theta)
+        return cid
+
+    def set_clump_velocity(self, cid, vel=None, omega=None, held=None):
+        if vel is not None:
+            self.clumps.vel[cid] = vel
+        if omega is not None:
+            self.clumps.omega[cid] = omega
+        if held is not None:
+            self.clumps.held[cid] = 1 if held else 0
+
+    def set_ball_velocity(self, ids, vel=None, omega=None, hold=None):
+        """Set velocities; ``hold`` = bitmask (1 x, 2 y, 4 spin) of velocity-held dofs."""
+        if vel is not None:
+            self.balls.vel[ids] = vel
+        if omega is not None:
+            self.balls.omega[ids] = omega
+        if hold is not None:
+            self.balls.fix[ids] = hold
+
+    def apply_force(self, ids, f):
+        """Constant external force on balls ``ids`` (pebbles: passed to their clump) until
+        changed [N]."""
+        self.balls.fext[ids] = f
+
+    def install_flat_joints(self, materials, balls=None):
+        """Flat joints between balls of one stone whose gap < g_i (per ``materials``:
+        a FlatJointMaterial for all, or {material_id: FlatJointMaterial}, the material
+        of ball i). Initial gap g_0 = 0: the current distance is the bonded state.
+        Returns the number of bonds installed."""
+        b = self.balls
+        alive = b.alive.copy()
+        if balls is not None:
+            mask = np.zeros_like(alive)
+            mask[balls] = 1
+            alive &= mask
+        fjm = materials if isinstance(materials, dict) else None
+        gap_factor = min(m.gap_factor for m in (fjm.values() if fjm else [materials]))
+        i, j = find_bond_candidates(b.pos, b.rad, b.stone, alive, max(gap_factor, 1e-12))
+        mats = [fjm[int(m)] if fjm else materials for m in b.mat[i]]
+        if fjm:   # per-material gap factors
+            keep = np.array([np.hypot(*(b.pos[jj] - b.pos[ii])) - b.rad[ii] - b.rad[jj]
+                             < m.gap_factor * min(b.rad[ii], b.rad[jj])
+                             for ii, jj, m in zip(i, j, mats)], bool)
+            i, j, mats = i[keep], j[keep], [m for m, k in zip(mats, keep) if k]
+        self._append_bonds(i, j, mats)
+        return len(i)
+
+    def _append_bonds(self, i, j, mats):
+        b, bd, ne, t = self.balls, self.bonds, self.n_elements, self.prm[P.THICK]
+        rmin = np.minimum(b.rad[i], b.rad[j])
+        rsum = b.rad[i] + b.rad[j]
+        kn = np.array([m.E for m in mats]) / rsum
+        new = dict(
+            i=i.astype(np.int32), j=j.astype(np.int32), active=np.ones(len(i), np.uint8),
+            rbar=np.array([m.lam for m in mats]) * rmin,
+            d0=np.hypot(*(b.pos[j] - b.pos[i]).T),
+            gi=np.array([m.gap_factor for m in mats]) * rmin,
+            kn=kn, ks=kn / np.array([m.kappa for m in mats]),
+            sigc=np.array([m.sigma_c for m in mats]), coh=np.array([m.c for m in mats]),
+            tanphi=np.tan(np.radians([m.phi_deg for m in mats])),
+            mu=np.array([m.mu for m in mats]), theta=np.zeros(len(i)), moment=np.zeros(len(i)),
+            state=np.ones((len(i), ne), np.uint8), fn=np.zeros((len(i), ne)),
+            fs=np.zeros((len(i), ne)))
+        if len(bd):
+            # drop pairs already bonded
+            have = set(zip(bd.i.tolist(), bd.j.tolist()))
+            keep = np.array([(a, c) not in have for a, c in zip(new["i"], new["j"])], bool)
+            new = {k: v[keep] for k, v in new.items()}
+        for k, v in new.items():
+            setattr(bd, k, np.concatenate([getattr(bd, k), v]))
+        order = np.lexsort((bd.j, bd.i))     # kernels need (i, j) order for the lookup
+        for k in new:
+            setattr(bd, k, getattr(bd, k)[order])
+        self.log.ensure(bd.state.size)
+        self._touch()
+
+    # ------------------------------------------------------------------ changing
+    def delete_balls(self, ids):
+        """Remove balls (ids stay valid, ``alive`` = 0); their bonds are removed."""
+        b = self.balls
+        b.alive[ids] = 0
+        b.vel[ids] = 0.0
+        b.force[ids] = 0.0
+        dead = b.alive == 0
+        bd = self.bonds
+        bd.active[dead[bd.i] | dead[bd.j]] = 0
+        self._touch()
+
+    def scale_bond_strength(self, factor, bonds=None):
+        """Multiply tensile strength and cohesion of ``bonds`` (default all) by factor."""
+        idx = slice(None) if bonds is None else bonds
+        self.bonds.sigc[idx] *= factor
+        self.bonds.coh[idx] *= factor
+
+    def set_damping(self, alpha, clump_alpha=None):
+        self.prm[P.ALPHA] = alpha
+        self.prm[P.ALPHA_CLUMP] = alpha if clump_alpha is None else clump_alpha
+
+    def set_gravity(self, g):
+        self.prm[P.GX], self.prm[P.GY] = g
+
+    def _touch(self):
+        self.cnt[2] = 1      # force a neighbour rebuild before the next step
+
+    # ------------------------------------------------------------------ running
+    @property
+    def step(self):
+        return int(self.cnt[0])
+
+    @property
+    def time(self):
+        return float(self.prm[P.TIME])
+
+    @property
+    def dt(self):
+        return float(self.prm[P.DT])
+
+    @property
+    def n_rebuilds(self):
+        return int(self.cnt[1])
+
+    def _prepare(self):
+        p, b = self.prm, self.balls
+        live = b.alive.astype(bool)
+        if self.skin is None:
+            self.skin = 0.5 * float(b.rad[live].max())
+        p[P.SKIN] = self.skin
+        if self.domain is None:
+            pts = [b.pos[live] - b.rad[live, None], b.pos[live] + b.rad[live, None]]
+            if len(self.walls):
+                pts.append(self.walls.seg[:, :2])
+                pts.append(self.walls.seg[:, 2:])
+            pts = np.vstack(pts)
+            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            m = 0.5 * (hi - lo).max()
+            self.domain = tuple(float(v) for v in (lo[0] - m, lo[1] - m, hi[0] + m, hi[1] + m))
+        p[P.XMIN], p[P.YMIN], p[P.XMAX], p[P.YMAX] = self.domain
+        if self.cnt[2]:
+            self._rebuild()
+        if self.step == 0 and not self._prepared:
+            # forces before the first step: the weight (the initial state has no history)
+            reset_forces(p[P.GX], p[P.GY], b.mass, b.fext, b.force, b.moment, b.clump, b.alive)
+        self._prepared = True
+
+    def _rebuild(self):
+        b, pr, wp, bd, p = self.balls, self.pairs, self.wpairs, self.bonds, self.prm
+        while True:
+            st, need = rebuild(b.pos, b.rad, b.alive, b.clump, b.pos0, p[P.SKIN], p[P.XMIN],
+                               p[P.YMIN], p[P.XMAX], p[P.YMAX], pr.i, pr.j, pr.hist, pr.bond,
+                               pr.n, bd.i, bd.j, self.walls.seg, wp.i, wp.s, wp.hist, wp.n)
+            if st == 0:
+                break
+            cap = need + need // 4 + 16
+            target = pr if st == 1 else wp
+            for name in ("i", "j", "s", "hist", "bond", "fn", "fs"):
+                if hasattr(target, name):
+                    a = getattr(target, name)
+                    g = np.zeros((cap,) + a.shape[1:], a.dtype)
+                    g[: a.shape[0]] = a
+                    setattr(target, name, g)
+        self.cnt[1] += 1
+        self.cnt[2] = 0
+        p[P.WALL_TRAVEL] = 0.0
+        dtc = self.critical_dt()
+        if p[P.AUTO_DT]:
+            if dtc >= 1e30:
+                dtc = self._lonely_dt()
+            p[P.DT] = p[P.DT_SAFETY] * dtc
+        if p[P.DT] <= 0.0:
+            raise ValueError("no timestep: give dt or add contacts/walls (dt_crit undefined)")
+
+    def _lonely_dt(self):
+        """dt_crit when nothing is near anything yet: the lightest ball in one contact
+        with its twin at the stiffest material (so the first contacts are safe)."""
+        b, p = self.balls, self.prm
+        live = b.alive == 1
+        if int(p[P.LAW]) == P.LAW_HOOKE:
+            k = p[P.H_KN] + p[P.H_KT]
+        else:
+            k = 2.0 * p[P.THICK] * (self.lc[..., LC_E] * (1 + 1 / self.lc[..., LC_KAPPA])).max()
+        return float(np.sqrt(b.mass[live].min() / k / 2.0))
+
+    def critical_dt(self):
+        """min sqrt(m/k_tr) and sqrt(I/k_rot) over the current Verlet lists and bonds."""
+        b, pr, wp, bd = self.balls, self.pairs, self.wpairs, self.bonds
+        return critical_dt(self.prm, b.rad, b.mass, b.inertia, b.minv, b.iinv, b.mat, b.clump,
+                           b.alive, pr.i, pr.j, pr.n[0], wp.i, wp.s, wp.n[0], self.walls.mat,
+                           bd.i, bd.j, bd.active, bd.rbar, bd.kn, bd.ks, self.lc)
+
+    def run(self, n_steps, callback=None, every=None):
+        """Advance ``n_steps`` steps. With ``callback``, call ``callback(sim)`` every
+        ``every`` steps (default: once at the end); the callback may change velocities,
+        parameters, delete balls... and may return True to stop early.
+        Raises SimulationError if a guard trips (step, ball id, value in the message)."""
+        every = n_steps if every is None else max(1, int(every))
+        done = 0
+        while done < n_steps:
+            k = min(every, n_steps - done)
+            self._prepare()
+            self._run_kernel(k)
+            done += k
+            if callback is not None and callback(self):
+                break
+        return self
+
+    def _run_kernel(self, k):
+        b, w, c, pr, wp, bd, lg = (self.balls, self.walls, self.clumps, self.pairs,
+                                   self.wpairs, self.bonds, self.log)
+        out = run_steps(k, self.prm, self.cnt, self.err, self.eacc, self.lc,
+                        b.pos, b.vel, b.omega, b.rad, b.mass, b.inertia, b.minv, b.iinv,
+                        b.force, b.moment, b.stone, b.mat, b.fix, b.clump, b.offset, b.alive,
+                        b.pos0, b.fext, w.seg, w.vel, w.omega, w.centre, w.force, w.moment, w.mat,
+                        w.link, c.pos, c.vel, c.omega, c.theta, c.mass, c.inertia, c.held,
+                        c.force, c.moment, pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs, pr.n,
+                        wp.i, wp.s, wp.hist, wp.fn, wp.fs, wp.n,
+                        bd.i, bd.j, bd.active, bd.rbar, bd.d0, bd.gi, bd.kn, bd.ks, bd.sigc,
+                        bd.coh, bd.tanphi, bd.mu, bd.theta, bd.moment, bd.state, bd.fn, bd.fs,
+                        lg.step, lg.time, lg.bond, lg.elem, lg.i, lg.j, lg.stone, lg.mode,
+                        lg.x, lg.y, lg.stress, lg.n)
+        status = out[0]
+        pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs = out[2:8]
+        wp.i, wp.s, wp.hist, wp.fn, wp.fs = out[8:13]
+        if status != P.OK:
+            i, v = int(self.err[0]), float(self.err[1])
+            raise SimulationError(
+                f"{P.STATUS_TEXT[status]} at step {self.step} (t = {self.time:.6g} s): "
+                f"ball {i} (stone {int(b.stone[i])}, clump {int(b.clump[i])}), value {v:.6g}; "
+                f"pos {b.pos[i].tolist()}, vel {b.vel[i].tolist()}, domain {self.domain}, "
+                f"vmax {self.prm[P.VMAX]:g}")
+
+    # ------------------------------------------------------------------ checkpoint
+    def save_checkpoint(self, path):
+        """Write the whole state to ``path`` (npz, atomic: temp file + rename)."""
+        save_state(path, self)
+
+    @classmethod
+    def load_checkpoint(cls, path):
+        """Restore a Simulation saved by ``save_checkpoint``; continuing it gives bitwise
+        the same trajectory as a run that never stopped."""
+        sim = cls.__new__(cls)
+        load_state(path, sim)
+        return sim
+
+    # ------------------------------------------------------------------ measurements
+    def wall_force(self, ids=None):
+        """Force exerted by the balls on segments ``ids`` (all if None) [N], (k, 2)."""
+        return output.wall_force(self, ids)
+
+    def wall_moment(self, ids=None):
+        """Moment of that force about each segment's rotation centre [N m]."""
+        return output.wall_moment(self, ids)
+
+    def clump_force(self, cid):
+        """(force [N], moment about the centre of mass [N m]) on clump ``cid``."""
+        return output.clump_force(self, cid)
+
+    def contact_list(self):
+        """Contacts carrying force: i, j (wall: -1 - segment), fx, fy on j, x, y."""
+        return output.contact_list(self)
+
+    def bond_list(self):
+        """Flat joints with per-element state and forces."""
+        return output.bond_list(self)
+
+    def breakages(self):
+        """Breakage log (step, time, bond, elem, i, j, stone, mode, x, y, stress)."""
+        return output.breakages(self)
+
+    def energies(self):
+        """Kinetic, potential, elastic and dissipated energies [J]."""
+        return output.energies(self)

@@ -1,0 +1,211 @@
+"""State of a 2D DEM model: plain dataclasses of numpy arrays (no behaviour but growth).
+
+Kernels receive the arrays themselves; ``Simulation`` owns these objects and the checkpoint.
+Ball ids are stable: deleting a ball clears ``alive`` instead of compacting the arrays.
+"""
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+
+def _grow(a, n_new, fill=0):
+    """Return ``a`` extended along axis 0 to ``n_new`` rows, new rows = ``fill``."""
+    out = np.full((n_new,) + a.shape[1:], fill, dtype=a.dtype)
+    out[: a.shape[0]] = a
+    return out
+
+
+class _Arrays:
+    """Mixin: dict round trip (checkpoint) and row growth for array dataclasses."""
+
+    def to_dict(self, prefix):
+        return {prefix + f.name: getattr(self, f.name) for f in fields(self)}
+
+    @classmethod
+    def from_dict(cls, d, prefix):
+        return cls(**{f.name: np.array(d[prefix + f.name]) for f in fields(cls)})
+
+
+def _z(*shape, dtype=np.float64):
+    return field(default_factory=lambda: np.zeros(shape, dtype=dtype))
+
+
+@dataclass
+class Balls(_Arrays):
+    """Disks. ``fix`` bitmask: 1 = x velocity held, 2 = y velocity held, 4 = spin held.
+    ``clump`` = clump id or -1; ``offset`` = pebble position in its clump frame."""
+    pos: np.ndarray = _z(0, 2)
+    vel: np.ndarray = _z(0, 2)
+    omega: np.ndarray = _z(0)
+    rad: np.ndarray = _z(0)
+    mass: np.ndarray = _z(0)          # gravitational mass rho*pi*R^2*t [kg]
+    inertia: np.ndarray = _z(0)       # m R^2 / 2 [kg m^2]
+    minv: np.ndarray = _z(0)          # 1 / inertial mass (density scaling may change it)
+    iinv: np.ndarray = _z(0)          # 1 / inertial moment of inertia
+    force: np.ndarray = _z(0, 2)      # net force incl. gravity and local damping [N]
+    moment: np.ndarray = _z(0)        # net moment [N m]
+    stone: np.ndarray = _z(0, dtype=np.int32)
+    mat: np.ndarray = _z(0, dtype=np.int32)
+    fix: np.ndarray = _z(0, dtype=np.int32)
+    clump: np.ndarray = _z(0, dtype=np.int32)
+    offset: np.ndarray = _z(0, 2)
+    alive: np.ndarray = _z(0, dtype=np.uint8)
+    pos0: np.ndarray = _z(0, 2)       # positions at the last neighbour build
+    fext: np.ndarray = _z(0, 2)       # external force set by the caller (a load) [N]
+
+    def __len__(self):
+        return self.pos.shape[0]
+
+    def append(self, **cols):
+        n0, k = len(self), len(cols["pos"])
+        for f in fields(self):
+            a = getattr(self, f.name)
+            setattr(self, f.name, _grow(a, n0 + k))
+        for name, v in cols.items():
+            getattr(self, name)[n0:] = v
+        return np.arange(n0, n0 + k)
+
+
+@dataclass
+class Walls(_Arrays):
+    """Kinematic line segments. Each moves with ``vel`` and rotates with ``omega`` about
+    ``centre``; ``link`` = (previous, next) segment of the same polyline or -1, so a ball
+    touching a joint is counted on one segment only."""
+    seg: np.ndarray = _z(0, 4)        # x0, y0, x1, y1 [m]
+    vel: np.ndarray = _z(0, 2)
+    omega: np.ndarray = _z(0)
+    centre: np.ndarray = _z(0, 2)
+    force: np.ndarray = _z(0, 2)      # force exerted BY balls ON the segment [N]
+    moment: np.ndarray = _z(0)        # moment of that force about ``centre`` [N m]
+    mat: np.ndarray = _z(0, dtype=np.int32)
+    link: np.ndarray = _z(0, 2, dtype=np.int32)
+
+    def __len__(self):
+        return self.seg.shape[0]
+
+    def append(self, **cols):
+        n0, k = len(self), len(cols["seg"])
+        for f in fields(self):
+            setattr(self, f.name, _grow(getattr(self, f.name), n0 + k))
+        for name, v in cols.items():
+            getattr(self, name)[n0:] = v
+        return np.arange(n0, n0 + k)
+
+
+@dataclass
+class Clumps(_Arrays):
+    """Rigid bodies of pebbles (pebbles are balls with ``Balls.clump`` = id).
+    ``held`` clumps keep the velocity the caller sets (PFC plate)."""
+    pos: np.ndarray = _z(0, 2)
+    vel: np.ndarray = _z(0, 2)
+    omega: np.ndarray = _z(0)
+    theta: np.ndarray = _z(0)
+    mass: np.ndarray = _z(0)
+    inertia: np.ndarray = _z(0)
+    held: np.ndarray = _z(0, dtype=np.uint8)
+    force: np.ndarray = _z(0, 2)      # net force incl. gravity [N]
+    moment: np.ndarray = _z(0)        # net moment about the centre of mass [N m]
+
+    def __len__(self):
+        return self.pos.shape[0]
+
+    def append(self, **cols):
+        n0 = len(self)
+        for f in fields(self):
+            setattr(self, f.name, _grow(getattr(self, f.name), n0 + 1))
+        for name, v in cols.items():
+            getattr(self, name)[n0] = v
+        return n0
+
+
+@dataclass
+class Pairs(_Arrays):
+    """Verlet list of ball-ball pairs (i < j, sorted by (i, j)) with contact history:
+    ``hist`` = shear force (PFC law, [0] along the tangent) or shear displacement vector
+    (hooke law); ``bond`` = flat-joint index of the pair or -1; ``fn``/``fs`` = last
+    normal/shear force (for output and energies)."""
+    i: np.ndarray = _z(0, dtype=np.int32)
+    j: np.ndarray = _z(0, dtype=np.int32)
+    hist: np.ndarray = _z(0, 2)
+    bond: np.ndarray = _z(0, dtype=np.int32)
+    fn: np.ndarray = _z(0)
+    fs: np.ndarray = _z(0)
+    n: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
+
+    @classmethod
+    def empty(cls, cap):
+        return cls(np.zeros(cap, np.int32), np.zeros(cap, np.int32), np.zeros((cap, 2)),
+                   np.full(cap, -1, np.int32), np.zeros(cap), np.zeros(cap),
+                   np.zeros(1, np.int64))
+
+
+@dataclass
+class WallPairs(_Arrays):
+    """Verlet list of ball-segment pairs (sorted by (ball, segment)) with shear history."""
+    i: np.ndarray = _z(0, dtype=np.int32)
+    s: np.ndarray = _z(0, dtype=np.int32)
+    hist: np.ndarray = _z(0, 2)
+    fn: np.ndarray = _z(0)
+    fs: np.ndarray = _z(0)
+    n: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
+
+    @classmethod
+    def empty(cls, cap):
+        return cls(np.zeros(cap, np.int32), np.zeros(cap, np.int32), np.zeros((cap, 2)),
+                   np.zeros(cap), np.zeros(cap), np.zeros(1, np.int64))
+
+
+@dataclass
+class Bonds(_Arrays):
+    """Flat joints (Potyondy 2012) in 2D, sorted by (i, j). Per bond: interface half
+    length ``rbar``, installation distance ``d0`` and gap ``gi``, stiffness per area
+    ``kn``/``ks`` [Pa/m], strengths ``sigc``/``coh`` [Pa], ``tanphi``, residual ``mu``;
+    per element (columns): ``state`` 1 = bonded, 0 = broken; ``fn`` normal force
+    (tension positive) [N]; ``fs`` shear force on ball j along the tangent [N].
+    ``theta`` = accumulated relative rotation omega_j - omega_i [rad]."""
+    i: np.ndarray = _z(0, dtype=np.int32)
+    j: np.ndarray = _z(0, dtype=np.int32)
+    active: np.ndarray = _z(0, dtype=np.uint8)
+    rbar: np.ndarray = _z(0)
+    d0: np.ndarray = _z(0)
+    gi: np.ndarray = _z(0)
+    kn: np.ndarray = _z(0)
+    ks: np.ndarray = _z(0)
+    sigc: np.ndarray = _z(0)
+    coh: np.ndarray = _z(0)
+    tanphi: np.ndarray = _z(0)
+    mu: np.ndarray = _z(0)
+    theta: np.ndarray = _z(0)
+    moment: np.ndarray = _z(0)        # bending moment on ball j about the interface centre
+    state: np.ndarray = _z(0, 1, dtype=np.uint8)
+    fn: np.ndarray = _z(0, 1)
+    fs: np.ndarray = _z(0, 1)
+
+    def __len__(self):
+        return self.i.shape[0]
+
+
+@dataclass
+class BreakLog(_Arrays):
+    """Every flat-joint element breakage: step, time, bond, element, balls, stone,
+    mode (1 = tension, 2 = shear), position of the element centroid, stress at failure
+    (sigma for tension, tau for shear) [Pa]. Capacity = number of installed elements,
+    since an element breaks at most once."""
+    step: np.ndarray = _z(0, dtype=np.int64)
+    time: np.ndarray = _z(0)
+    bond: np.ndarray = _z(0, dtype=np.int32)
+    elem: np.ndarray = _z(0, dtype=np.int32)
+    i: np.ndarray = _z(0, dtype=np.int32)
+    j: np.ndarray = _z(0, dtype=np.int32)
+    stone: np.ndarray = _z(0, dtype=np.int32)
+    mode: np.ndarray = _z(0, dtype=np.int32)
+    x: np.ndarray = _z(0)
+    y: np.ndarray = _z(0)
+    stress: np.ndarray = _z(0)
+    n: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
+
+    def ensure(self, cap):
+        if self.step.shape[0] < cap:
+            for f in fields(self):
+                if f.name != "n":
+                    setattr(self, f.name, _grow(getattr(self, f.name), cap))
