@@ -187,20 +187,21 @@ class FormGenerator:
         a, b, c, da, db = geometry.evaluate_dimensions(pts)
         return pts, semi, np.column_stack([a, b, c]), da, db
 
-    def _stone(self, pts, dims, da, db, material, group_index):
+    def _stone(self, pts, dims, da, db, stone_flags_row, material, group_index):
         vertices, faces = geometry.convex_hull(pts)
         volume, centroid = geometry.volume_and_centroid(vertices, faces)
-        flat, nc, long = (bool(f[0]) for f in stone_flags(*dims))
+        flat, nc, long = (bool(f) for f in stone_flags_row)
         return Stone(vertices, faces, *map(float, dims), da, db, volume, centroid,
                      volume * self._density[material], material, group_index, flat, nc, long)
 
     def _matches(self, dims, group, flags):
+        """Which candidates fall in the class, and every candidate's (flat, non_cubic, long)."""
         g = sieve_group(dims[:, 1])
         flat, nc, long = stone_flags(*dims.T)
         ok = (g == group.index) & (nc == flags["non_cubic"]) & (long == flags["long"])
         if "flat" in flags:
             ok &= flat == flags["flat"]
-        return ok
+        return ok, np.column_stack([flat, nc, long])
 
     def _accept(self, stone, ledger):
         self.stones.append(stone)
@@ -227,10 +228,10 @@ class FormGenerator:
         if aim:
             dims = self._scale_to_mass(dims, cap, density, group, flags)
         pts, semi, measured, da, db = self._candidates(dims)
-        hits = np.nonzero(self._matches(measured, group, flags))[0]
+        ok, fl = self._matches(measured, group, flags)
         stones = []
-        for i in hits:
-            s = self._stone(pts[i], measured[i], da[i], db[i], material, group.index)
+        for i in np.nonzero(ok)[0]:
+            s = self._stone(pts[i], measured[i], da[i], db[i], fl[i], material, group.index)
             stones.append(s)
             if not aim:
                 if s.mass > ledger.cap(flags):
@@ -292,8 +293,9 @@ class FormGenerator:
                 continue
             dims = self._scale_to_mass(dims, missing, self._density[material], group, flags)
             pts, semi, measured, da, db = self._candidates(dims)
-            options = [self._stone(pts[i], measured[i], da[i], db[i], material, group.index)
-                       for i in np.nonzero(self._matches(measured, group, flags))[0]]
+            ok, fl = self._matches(measured, group, flags)
+            options = [self._stone(pts[i], measured[i], da[i], db[i], fl[i], material, group.index)
+                       for i in np.nonzero(ok)[0]]
             enough = [s for s in options if s.mass >= missing]
             if enough:
                 self._accept(min(enough, key=lambda s: s.mass), ledger)

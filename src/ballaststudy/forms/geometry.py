@@ -8,6 +8,13 @@ from scipy.spatial import ConvexHull
 from shapely.geometry import Polygon
 
 
+def _cross(u, v):
+    """Row-wise cross product of (..., 3) arrays; np.cross costs more than the maths for tiny arrays."""
+    return np.stack([u[..., 1] * v[..., 2] - u[..., 2] * v[..., 1],
+                     u[..., 2] * v[..., 0] - u[..., 0] * v[..., 2],
+                     u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]], axis=-1)
+
+
 def ellipsoid_surface_points(rng, semi_axes, n):
     """n random points on the surface of ellipsoids with the given semi-axes, shape (batch, n, 3).
 
@@ -46,7 +53,7 @@ def evaluate_dimensions(points):
     # the exact projection leaves a round-off component along a; remove it
     dir_b -= np.einsum("bk,bk->b", dir_b, dir_a)[:, None] * dir_a
     dir_b /= np.linalg.norm(dir_b, axis=1, keepdims=True)
-    on_line = np.einsum("bnk,bk->bn", points, np.cross(dir_a, dir_b))
+    on_line = np.einsum("bnk,bk->bn", points, _cross(dir_a, dir_b))
     c = on_line.max(axis=1) - on_line.min(axis=1)
     return a, b, c, dir_a, dir_b
 
@@ -57,26 +64,31 @@ def convex_hull(points):
     Only hull vertices are kept (points on an ellipsoid surface all are), faces index them.
     """
     hull = ConvexHull(points)
-    used = np.unique(hull.simplices)
-    remap = np.full(len(points), -1)
-    remap[used] = np.arange(used.size)
-    vertices = points[used]
-    faces = remap[hull.simplices]
+    vertices, faces = points, hull.simplices.copy()
+    if len(hull.vertices) < len(points):
+        used = np.sort(hull.vertices)
+        remap = np.full(len(points), -1)
+        remap[used] = np.arange(used.size)
+        vertices, faces = points[used], remap[faces]
     v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
-    outward = np.einsum("fk,fk->f", np.cross(v1 - v0, v2 - v0), hull.equations[:, :3]) < 0
+    outward = np.einsum("fk,fk->f", _cross(v1 - v0, v2 - v0), hull.equations[:, :3]) < 0
     faces[outward] = faces[outward][:, ::-1]
     return vertices, faces
 
 
-def volume_and_centroid(vertices, faces):
+def volume_and_centroid(vertices, faces, signed=False):
     """Volume by tetrahedra from an interior point (eq. 3.2) and the solid's centroid.
 
     The interior point is the vertex mean, inside any convex polyhedron; each face with it
-    spans one tetrahedron of volume |(v1-p) x (v2-p) . (v3-p)| / 6.
+    spans one tetrahedron of volume |(v1-p) x (v2-p) . (v3-p)| / 6. With signed=True the
+    tetrahedra keep their sign, which is exact for any closed, consistently wound mesh
+    (convex or not); the result is negative for an inward-wound one.
     """
     p = vertices.mean(axis=0)
     v1, v2, v3 = (vertices[faces[:, k]] - p for k in range(3))
-    tet = np.abs(np.einsum("fk,fk->f", np.cross(v1, v2), v3)) / 6.0
+    tet = np.einsum("fk,fk->f", _cross(v1, v2), v3) / 6.0
+    if not signed:
+        tet = np.abs(tet)
     volume = tet.sum()
     centroid = p + (tet[:, None] * (v1 + v2 + v3) / 4.0).sum(axis=0) / volume
     return float(volume), centroid
@@ -88,9 +100,10 @@ def section_profile(vertices, faces, origin, dir_a, dir_b):
     Returns (n, 2) counter-clockwise vertices in the plane's (a, b) coordinates relative to
     origin: the stone's 2D profile for the 2D DEM (thesis 4.2.1).
     """
-    normal = np.cross(dir_a, dir_b)
+    normal = _cross(dir_a, dir_b)
     edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    edges = np.unique(np.sort(edges, axis=1), axis=0)
+    # consistently wound faces run each edge once in each direction: keep one of the two
+    edges = edges[edges[:, 0] < edges[:, 1]]
     s = (vertices - origin) @ normal
     s0, s1 = s[edges[:, 0]], s[edges[:, 1]]
     cross = s0 * s1 < 0

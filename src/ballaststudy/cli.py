@@ -1,0 +1,124 @@
+"""The `ballaststudy` command: one subcommand per stage of the chain."""
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import pandas as pd
+import xarray as xr
+from tqdm import tqdm
+
+from .config import ConfigError, database_seed, form_params, load_config, load_databases, select_databases
+from .forms.evaluate import MeshError, evaluate_stl
+from .forms.generator import GenerationError
+from .forms.objective import ObjectiveError
+from .forms.validate import SUMMARY_COLUMNS, validation_row
+
+
+def _forms_generate(args):
+    cfg = load_config(args.config)
+    params = form_params(cfg)
+    databases = load_databases(cfg["databases_file"], params)
+    if args.all == bool(args.names):
+        raise ConfigError("command line", "DATABASE", "name databases or give --all (not both)")
+    names = select_databases(cfg if args.all else {"databases": args.names}, databases, args.config)
+    from .forms.pipeline import generate_database  # heavy imports only when generating
+    bar = tqdm(names, desc="form databases", unit="db", disable=args.quiet)
+    for name in bar:
+        bar.set_postfix_str(name)
+        definition = databases[name]
+        nc = generate_database(name, definition, database_seed(cfg["seed"], name, definition), params,
+                               args.out, config_files=(args.config, cfg["databases_file"]))
+        tqdm.write(f"wrote {nc}") if not args.quiet else None
+
+
+def _open(path):
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(path, None, "file not found")
+    with xr.open_dataset(path) as ds:
+        return ds.load()
+
+
+def _forms_validate(args):
+    rows = [validation_row(_open(p)) for p in args.files]
+    if args.csv:
+        pd.DataFrame(rows).to_csv(args.csv, index=False)
+    if args.json:
+        print(json.dumps(rows, indent=1))
+    else:
+        table = pd.DataFrame(rows)[SUMMARY_COLUMNS]
+        with pd.option_context("display.width", 250, "display.max_columns", 40):
+            print(table.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+
+
+def _forms_evaluate(args):
+    print(json.dumps(evaluate_stl(args.stl, args.density), indent=1))
+
+
+def _forms_report(args):
+    from .forms.report import write_report
+    for path in write_report([_open(p) for p in args.files], args.out, args.stones, args.seed):
+        print(f"wrote {path}")
+
+
+def _config_check(args):
+    cfg = load_config(args.config)
+    dbs = load_databases(cfg["databases_file"], form_params(cfg))
+    names = select_databases(cfg, dbs, args.config)
+    print(f"{args.config}: ok ({len(names)} databases: {', '.join(names)})")
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog="ballaststudy", description=__doc__)
+    sub = p.add_subparsers(dest="stage", required=True)
+
+    forms = sub.add_parser("forms", help="ballast random form generator (thesis ch. 3)")
+    fs = forms.add_subparsers(dest="action", required=True)
+    g = fs.add_parser("generate", help="generate form databases")
+    g.add_argument("names", nargs="*", metavar="DATABASE")
+    g.add_argument("--all", action="store_true", help="every database the config selects")
+    g.add_argument("--out", required=True, type=Path, help="output folder")
+    g.add_argument("--config", default="config/config.yaml", type=Path)
+    g.add_argument("--quiet", action="store_true")
+    g.set_defaults(func=_forms_generate)
+
+    v = fs.add_parser("validate", help="objective vs generated parameters")
+    v.add_argument("files", nargs="+", metavar="FILE.nc")
+    v.add_argument("--json", action="store_true", help="print a JSON list, one object per database")
+    v.add_argument("--csv", type=Path, help="also write the full table as CSV")
+    v.set_defaults(func=_forms_validate)
+
+    e = fs.add_parser("evaluate", help="a, b, c, volume, group and flags of one STL stone")
+    e.add_argument("stl", metavar="STONE.stl")
+    e.add_argument("--density", type=float, metavar="KG_M3", help="give the mass too")
+    e.set_defaults(func=_forms_evaluate)
+
+    r = fs.add_parser("report", help="figures like thesis Figs. 3-9 ... 3-16")
+    r.add_argument("files", nargs="+", metavar="FILE.nc")
+    r.add_argument("--out", required=True, type=Path)
+    r.add_argument("--stones", type=int, default=9, help="random stones per database (Fig. 3-9)")
+    r.add_argument("--seed", type=int, default=0, help="which random stones are shown")
+    r.set_defaults(func=_forms_report)
+
+    c = sub.add_parser("config", help="configuration")
+    cs = c.add_subparsers(dest="action", required=True)
+    ck = cs.add_parser("check", help="validate the config and database definitions")
+    ck.add_argument("--config", default="config/config.yaml", type=Path)
+    ck.set_defaults(func=_config_check)
+    return p
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except (ConfigError, ObjectiveError, GenerationError, MeshError) as err:
+        print(f"ballaststudy: error: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
