@@ -30,7 +30,8 @@ def _forms_generate(args):
         definition = databases[name]
         nc = generate_database(name, definition, database_seed(cfg["seed"], name, definition), params,
                                args.out, config_files=(args.config, cfg["databases_file"]))
-        tqdm.write(f"wrote {nc}") if not args.quiet else None
+        if not args.quiet:
+            tqdm.write(f"wrote {nc}")
 
 
 def _open(path):
@@ -59,8 +60,31 @@ def _forms_evaluate(args):
 
 def _forms_report(args):
     from .forms.report import write_report
-    for path in write_report([_open(p) for p in args.files], args.out, args.stones, args.seed):
+    from .provenance import Recorder
+    recorder = Recorder("forms report", inputs=args.files, params={"stones": args.stones, "seed": args.seed})
+    paths = write_report([_open(p) for p in args.files], args.out, args.stones, args.seed)
+    recorder.finish()
+    for path in paths:
+        if str(path).endswith(".csv"):
+            recorder.write_beside(path)
         print(f"wrote {path}")
+
+
+def _provenance_show(args):
+    from .provenance.store import lineage, load_records
+    print("\n".join(lineage(args.file, load_records(args.results))))
+
+
+def _provenance_verify(args):
+    from .provenance.store import load_records, verify, write_store
+    records = load_records(args.results)
+    write_store(args.results, Path(args.results) / "provenance" / "store.json")
+    problems = verify(records)
+    for path, what in problems:
+        print(f"{path}: {what}")
+    print(f"{len({id(r) for r in records.values()})} records, {len(problems)} problems")
+    if problems:
+        raise SystemExit(1)
 
 
 def _config_check(args):
@@ -101,6 +125,16 @@ def build_parser():
     r.add_argument("--stones", type=int, default=9, help="random stones per database (Fig. 3-9)")
     r.add_argument("--seed", type=int, default=0, help="which random stones are shown")
     r.set_defaults(func=_forms_report)
+
+    pv = sub.add_parser("provenance", help="what made an output, and is it still current")
+    ps = pv.add_subparsers(dest="action", required=True)
+    sh = ps.add_parser("show", help="lineage of one output back to the config")
+    sh.add_argument("file")
+    sh.add_argument("--results", default="results")
+    sh.set_defaults(func=_provenance_show)
+    vf = ps.add_parser("verify", help="re-hash every recorded input and output; exit 1 if any changed")
+    vf.add_argument("--results", default="results")
+    vf.set_defaults(func=_provenance_verify)
 
     c = sub.add_parser("config", help="configuration")
     cs = c.add_subparsers(dest="action", required=True)
