@@ -1,0 +1,97 @@
+"""The Snakemake workflow on a tiny study: runs, reruns only what a config edit touches,
+does nothing when nothing changed, and the SLURM profile passes a dry run."""
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _snakemake(cwd, *args):
+    out = subprocess.run(["snakemake", "--cores", "2", *args], cwd=cwd, capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout + out.stderr
+    return out.stdout + out.stderr
+
+
+def _jobs(log):
+    """{rule: count} from the dry-run job table."""
+    return {m[1]: int(m[2]) for m in re.finditer(r"^(\w+)\s+(\d+)$", log, re.M) if m[1] != "total"}
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    d = tmp_path_factory.mktemp("study")
+    shutil.copy(ROOT / "Snakefile", d)
+    shutil.copytree(ROOT / "workflow", d / "workflow", symlinks=False)
+    shutil.copytree(ROOT / "profiles", d / "profiles")
+    (d / "config").mkdir()
+    dbs = yaml.safe_load((ROOT / "config" / "databases.yaml").read_text())
+    dbs["defaults"]["mass_kg"] = 3
+    dbs["databases"] = {k: dbs["databases"][k] for k in ("G_1-5", "box_test")}
+    (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
+    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
+    _snakemake(d)
+    return d
+
+
+def test_first_run_makes_every_output(study):
+    for name in ("G_1-5", "box_test"):
+        assert (study / "results" / "forms" / f"{name}.nc").is_file()
+        assert (study / "results" / "forms" / f"{name}.stl.zip").is_file()
+    assert (study / "results" / "forms" / "report" / "validation.csv").is_file()
+
+
+def test_rerun_with_nothing_changed_does_nothing(study):
+    assert "Nothing to be done" in _snakemake(study, "-n")
+
+
+def test_editing_one_database_reruns_only_it(study):
+    path = study / "config" / "databases.yaml"
+    original = path.read_text()
+    dbs = yaml.safe_load(original)
+    dbs["databases"]["box_test"]["shape_index"] = 20
+    path.write_text(yaml.safe_dump(dbs))
+    try:
+        jobs = _jobs(_snakemake(study, "-n"))
+    finally:
+        path.write_text(original)
+    assert jobs.get("forms_generate") == 1, jobs
+    assert jobs.get("forms_report") == 1, jobs
+
+
+def test_editing_form_settings_reruns_every_database(study):
+    path = study / "config" / "config.yaml"
+    original = path.read_text()
+    cfg = yaml.safe_load(original)
+    cfg["forms"]["n_vertices"] = 24
+    path.write_text(yaml.safe_dump(cfg))
+    try:
+        jobs = _jobs(_snakemake(study, "-n"))
+    finally:
+        path.write_text(original)
+    assert jobs.get("forms_generate") == 2, jobs
+
+
+def test_bad_config_is_rejected_before_any_job(study):
+    path = study / "config" / "databases.yaml"
+    original = path.read_text()
+    dbs = yaml.safe_load(original)
+    dbs["databases"]["G_1-5"]["mass_kg"] = -1
+    path.write_text(yaml.safe_dump(dbs))
+    try:
+        out = subprocess.run(["snakemake", "--cores", "1", "-n"], cwd=study, capture_output=True, text=True)
+    finally:
+        path.write_text(original)
+    assert out.returncode != 0
+    assert "databases.G_1-5.mass_kg" in out.stdout + out.stderr
+
+
+def test_slurm_profile_dry_run(study):
+    log = _snakemake(study, "-n", "--profile", "profiles/slurm", "--forceall")
+    assert _jobs(log).get("forms_generate") == 2, log
