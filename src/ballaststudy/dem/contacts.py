@@ -53,17 +53,17 @@ def hooke_history(delta, vn, vtx, vty, nx, ny, kn, kt, gn, gt, mu, meff, dt, his
     fn = kn * delta - meff * gn * vn
     sx = hist[h, 0] + vtx * dt
     sy = hist[h, 1] + vty * dt
-    shrmag = math.sqrt(sx * sx + sy * sy)
+    shrmag2 = sx * sx + sy * sy       # |xi| before the projection, as in LAMMPS
     rsht = sx * nx + sy * ny          # keep xi in the tangent plane
     sx -= rsht * nx
     sy -= rsht * ny
     fsx = -(kt * sx + meff * gt * vtx)
     fsy = -(kt * sy + meff * gt * vty)
-    fs = math.sqrt(fsx * fsx + fsy * fsy)
+    fs2 = fsx * fsx + fsy * fsy
     fmax = mu * abs(fn)
-    if fs > fmax:
-        if shrmag != 0.0:
-            r = fmax / fs
+    if fs2 > fmax * fmax:             # squares: no sqrt unless sliding
+        if shrmag2 != 0.0:
+            r = fmax / math.sqrt(fs2)
             sx = r * (sx + meff * gt * vtx / kt) - meff * gt * vtx / kt
             sy = r * (sy + meff * gt * vty / kt) - meff * gt * vty / kt
             fsx *= r
@@ -76,12 +76,96 @@ def hooke_history(delta, vn, vtx, vty, nx, ny, kn, kt, gn, gt, mu, meff, dt, his
     return fn, fsx, fsy
 
 
+# fastmath without nnan/ninf/reassoc: same binary -> same bits (run-to-run and across a
+# checkpoint restart), NaN still propagates to the guards
+FAST = {"arcp", "contract", "nsz", "afn"}
+
+
 @njit(cache=True)
-def pair_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
-                p_i, p_j, p_h, p_bond, p_fn, p_fs, npair, b_active, lc, eacc):
-    """Add ball-ball contact forces of the Verlet list to force/moment."""
+def pack_kinematics(pos, vel, omega, rad, minv, mat, kin):
+    """kin[i] = (x, y, vx, vy, omega, R, 1/m, material): one cache line per ball for the
+    pair loop, whose j accesses are scattered (measured ~20 % faster than 7 arrays)."""
+    for i in range(pos.shape[0]):
+        kin[i, 0] = pos[i, 0]
+        kin[i, 1] = pos[i, 1]
+        kin[i, 2] = vel[i, 0]
+        kin[i, 3] = vel[i, 1]
+        kin[i, 4] = omega[i]
+        kin[i, 5] = rad[i]
+        kin[i, 6] = minv[i]
+        kin[i, 7] = mat[i]
+
+
+@njit(cache=True)
+def pair_forces(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
+                b_active, lc, eacc):
+    """Add ball-ball contact forces of the Verlet list to force/moment (kin: see
+    ``pack_kinematics``)."""
+    if int(prm[P.LAW]) == P.LAW_HOOKE:
+        _pairs_hooke(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
+                     b_active)
+    else:
+        _pairs_pfc(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
+                   b_active, lc, eacc)
+
+
+@njit(cache=True, fastmath=FAST)
+def _pairs_hooke(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair, b_active):
     dt = prm[P.DT]
-    law = int(prm[P.LAW])
+    kn = prm[P.H_KN]
+    kt = prm[P.H_KT]
+    gn = prm[P.H_GN]
+    gt = prm[P.H_GT]
+    mu = prm[P.H_MU]
+    bonds = b_active.shape[0] > 0
+    for p in range(npair):
+        i = p_i[p]
+        j = p_j[p]
+        dx = kin[j, 0] - kin[i, 0]
+        dy = kin[j, 1] - kin[i, 1]
+        d2 = dx * dx + dy * dy
+        ri = kin[i, 5]
+        rj = kin[j, 5]
+        rs = ri + rj
+        if d2 >= rs * rs:
+            if p_fn[p] != 0.0 or p_h[p, 0] != 0.0 or p_h[p, 1] != 0.0:
+                p_h[p, 0] = 0.0           # contact lost: history restarts at zero
+                p_h[p, 1] = 0.0
+                p_fn[p] = 0.0
+                p_fs[p] = 0.0
+            continue
+        if bonds:
+            b = p_bond[p]
+            if b >= 0 and b_active[b]:
+                continue                  # a flat joint replaces the contact
+        d = math.sqrt(d2)
+        rinv = 1.0 / d
+        nx = dx * rinv
+        ny = dy * rinv
+        mc = 1.0 / (kin[i, 6] + kin[j, 6])
+        w = kin[i, 4] * ri + kin[j, 4] * rj
+        vrx = kin[j, 2] - kin[i, 2] + w * ny       # - w * t, t = (-ny, nx)
+        vry = kin[j, 3] - kin[i, 3] - w * nx
+        vn = vrx * nx + vry * ny
+        fn, fsx, fsy = hooke_history(rs - d, vn, vrx - vn * nx, vry - vn * ny, nx, ny,
+                                     kn, kt, gn, gt, mu, mc, dt, p_h, p)
+        ft = fsy * nx - fsx * ny
+        fx = fn * nx + fsx
+        fy = fn * ny + fsy
+        force[j, 0] += fx
+        force[j, 1] += fy
+        force[i, 0] -= fx
+        force[i, 1] -= fy
+        moment[j] -= rj * ft
+        moment[i] -= ri * ft
+        p_fn[p] = fn
+        p_fs[p] = ft
+
+
+@njit(cache=True)
+def _pairs_pfc(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair, b_active,
+               lc, eacc):
+    dt = prm[P.DT]
     thick = prm[P.THICK]
     ed = 0.0
     ef = 0.0
@@ -91,10 +175,12 @@ def pair_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
         b = p_bond[p]
         if b >= 0 and b_active[b]:
             continue                      # a flat joint replaces the linear contact
-        dx = pos[j, 0] - pos[i, 0]
-        dy = pos[j, 1] - pos[i, 1]
+        dx = kin[j, 0] - kin[i, 0]
+        dy = kin[j, 1] - kin[i, 1]
         d2 = dx * dx + dy * dy
-        rs = rad[i] + rad[j]
+        ri = kin[i, 5]
+        rj = kin[j, 5]
+        rs = ri + rj
         if d2 >= rs * rs:
             p_h[p, 0] = 0.0               # contact lost: history restarts at zero
             p_h[p, 1] = 0.0
@@ -107,37 +193,25 @@ def pair_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
         ny = dy / d
         tx = -ny
         ty = nx
-        mc = 1.0 / (minv[i] + minv[j])
-        if law == P.LAW_HOOKE:
-            ai = rad[i]
-            aj = rad[j]
-        else:
-            ai = rad[i] - 0.5 * delta     # PFC contact point: middle of the overlap
-            aj = rad[j] - 0.5 * delta
-        w = omega[i] * ai + omega[j] * aj
-        vrx = vel[j, 0] - vel[i, 0] - w * tx
-        vry = vel[j, 1] - vel[i, 1] - w * ty
+        mc = 1.0 / (kin[i, 6] + kin[j, 6])
+        ai = ri - 0.5 * delta             # PFC contact point: middle of the overlap
+        aj = rj - 0.5 * delta
+        w = kin[i, 4] * ai + kin[j, 4] * aj
+        vrx = kin[j, 2] - kin[i, 2] - w * tx
+        vry = kin[j, 3] - kin[i, 3] - w * ty
         vn = vrx * nx + vry * ny
-        if law == P.LAW_HOOKE:
-            fn, fsx, fsy = hooke_history(delta, vn, vrx - vn * nx, vry - vn * ny, nx, ny,
-                                         prm[P.H_KN], prm[P.H_KT], prm[P.H_GN], prm[P.H_GT],
-                                         prm[P.H_MU], mc, dt, p_h, p)
-            ft = fsx * tx + fsy * ty
-        else:
-            ma = mat[i]
-            mb = mat[j]
-            kn = 2.0 * min(rad[i], rad[j]) * thick * lc[ma, mb, LC_E] / rs
-            ks = kn / lc[ma, mb, LC_KAPPA]
-            vt = vrx * tx + vry * ty
-            fn, ft, fnl, e1, e2 = pfc_linear(delta, vn, vt, kn, ks, lc[ma, mb, LC_MU],
-                                             lc[ma, mb, LC_BN], lc[ma, mb, LC_BS],
-                                             lc[ma, mb, LC_NOTENSION] > 0.0, mc, dt, p_h, p)
-            fsx = ft * tx
-            fsy = ft * ty
-            ed += e1
-            ef += e2
-        fx = fn * nx + fsx
-        fy = fn * ny + fsy
+        ma = int(kin[i, 7])
+        mb = int(kin[j, 7])
+        kn = 2.0 * min(ri, rj) * thick * lc[ma, mb, LC_E] / rs
+        ks = kn / lc[ma, mb, LC_KAPPA]
+        vt = vrx * tx + vry * ty
+        fn, ft, fnl, e1, e2 = pfc_linear(delta, vn, vt, kn, ks, lc[ma, mb, LC_MU],
+                                         lc[ma, mb, LC_BN], lc[ma, mb, LC_BS],
+                                         lc[ma, mb, LC_NOTENSION] > 0.0, mc, dt, p_h, p)
+        ed += e1
+        ef += e2
+        fx = fn * nx + ft * tx
+        fy = fn * ny + ft * ty
         force[j, 0] += fx
         force[j, 1] += fy
         force[i, 0] -= fx

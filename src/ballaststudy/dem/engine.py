@@ -5,12 +5,13 @@ more than skin/2 since the last build (wall motion counted) -> weight -> ball-ba
 contacts -> flat joints -> ball-wall contacts -> clump sums -> local damping + half kick
 -> guards. Returns early with a status code when a guard trips (after the full step).
 """
+import numpy as np
 from numba import njit
 
 from . import params as P
 from .bonds import bond_forces
 from .clumps import gather_clumps, place_pebbles
-from .contacts import pair_forces
+from .contacts import pack_kinematics, pair_forces
 from .integrate import critical_dt, first_half, reset_forces, second_half
 from .neighbours import grow_rows, rebuild
 from .walls import move_walls, wall_forces
@@ -33,15 +34,17 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
     pair and wall-pair arrays are returned: (status, steps done, p_i, p_j, p_h, p_bond,
     p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)."""
     half_skin2 = (0.5 * prm[P.SKIN]) ** 2
+    kin = np.empty((pos.shape[0], 8))
     for k in range(nsteps):
         dt = prm[P.DT]
         dt_next = dt
         dmax2 = first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
                            pos0, cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia,
                            cheld)
-        place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
+        if cpos.shape[0] > 0:
+            place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
         prm[P.WALL_TRAVEL] += move_walls(seg, wvel, womega, centre, dt)   # wall travel since build
-        for i in range(pos.shape[0]):
+        for i in range(pos.shape[0] if cpos.shape[0] > 0 else 0):
             if clump[i] >= 0 and alive[i]:
                 dx = pos[i, 0] - pos0[i, 0]
                 dy = pos[i, 1] - pos0[i, 1]
@@ -79,21 +82,25 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
         cnt[0] += 1
         prm[P.TIME] += dt
         reset_forces(prm[P.GX], prm[P.GY], mass, fext, force, moment, clump, alive)
-        pair_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
-                    p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n[0], b_active, lc, eacc)
-        bond_forces(prm, cnt[0], pos, vel, omega, rad, stone, force, moment,
-                    b_i, b_j, b_active, rbar, d0, gi, bkn, bks, sigc, coh, tanphi, bmu,
-                    theta, bmom, state, bfn, bfs,
-                    l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
-                    l_stress, l_n, eacc)
+        pack_kinematics(pos, vel, omega, rad, minv, mat, kin)
+        pair_forces(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n[0],
+                    b_active, lc, eacc)
+        if b_i.shape[0] > 0:
+            bond_forces(prm, cnt[0], pos, vel, omega, rad, stone, force, moment,
+                        b_i, b_j, b_active, rbar, d0, gi, bkn, bks, sigc, coh, tanphi, bmu,
+                        theta, bmom, state, bfn, bfs,
+                        l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
+                        l_stress, l_n, eacc)
         wall_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
                     seg, wvel, womega, centre, wmat, link, wforce, wmoment,
                     w_i, w_s, w_h, w_fn, w_fs, w_n[0], lc, eacc)
-        gather_clumps(prm[P.GX], prm[P.GY], pos, force, moment, clump, alive, cpos, cmass,
-                      cforce, cmoment)
+        if cpos.shape[0] > 0:
+            gather_clumps(prm[P.GX], prm[P.GY], pos, force, moment, clump, alive, cpos, cmass,
+                          cforce, cmoment)
         st = second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
                          cvel, comega, cforce, cmoment, cmass, cinertia, cheld, eacc, err)
-        place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
+        if cpos.shape[0] > 0:
+            place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
         prm[P.DT] = dt_next
         if st != P.OK:
             return (st, k + 1, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)

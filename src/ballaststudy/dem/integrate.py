@@ -19,7 +19,8 @@ from .contacts import LC_E, LC_KAPPA
 def first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive, pos0,
                cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia, cheld):
     """Half kick + drift for free balls and free clumps; held dofs keep their velocity.
-    Returns the largest squared ball displacement since the last neighbour build."""
+    Returns the largest squared displacement of a free ball since the last neighbour
+    build (pebbles are checked by the caller after they are placed)."""
     h = 0.5 * dt
     dmax2 = 0.0
     for i in range(pos.shape[0]):
@@ -32,8 +33,13 @@ def first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive
             vel[i, 1] += h * force[i, 1] * minv[i]
         if not (f & 4):
             omega[i] += h * moment[i] * iinv[i]
-        pos[i, 0] += dt * vel[i, 0]
-        pos[i, 1] += dt * vel[i, 1]
+        x = pos[i, 0] + dt * vel[i, 0]
+        y = pos[i, 1] + dt * vel[i, 1]
+        pos[i, 0] = x
+        pos[i, 1] = y
+        dx = x - pos0[i, 0]
+        dy = y - pos0[i, 1]
+        dmax2 = max(dmax2, dx * dx + dy * dy)
     for c in range(cpos.shape[0]):
         if not cheld[c]:
             cvel[c, 0] += h * cforce[c, 0] / cmass[c]
@@ -42,11 +48,6 @@ def first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive
         cpos[c, 0] += dt * cvel[c, 0]
         cpos[c, 1] += dt * cvel[c, 1]
         ctheta[c] += dt * comega[c]
-    for i in range(pos.shape[0]):
-        if alive[i]:
-            dx = pos[i, 0] - pos0[i, 0]
-            dy = pos[i, 1] - pos0[i, 1]
-            dmax2 = max(dmax2, dx * dx + dy * dy)
     return dmax2
 
 
@@ -127,27 +128,39 @@ def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, ali
 
 @njit(cache=True)
 def guards(prm, pos, vel, omega, alive, err):
-    """NaN/Inf, runaway speed, ball outside the domain -> status code (params.py)."""
+    """NaN/Inf, runaway speed, ball outside the domain -> status code (params.py); the
+    offending ball id and value go to err. One cheap pass: the slow path only on failure."""
     vmax2 = prm[P.VMAX] ** 2
+    x0 = prm[P.XMIN]
+    x1 = prm[P.XMAX]
+    y0 = prm[P.YMIN]
+    y1 = prm[P.YMAX]
+    bad = -1
     for i in range(pos.shape[0]):
-        if not alive[i]:
-            continue
-        s = pos[i, 0] + pos[i, 1] + vel[i, 0] + vel[i, 1] + omega[i]
-        if not math.isfinite(s):
-            err[0] = i
-            err[1] = s
-            return P.NAN_FOUND
-        v2 = vel[i, 0] ** 2 + vel[i, 1] ** 2
-        if v2 > vmax2:
-            err[0] = i
-            err[1] = math.sqrt(v2)
-            return P.RUNAWAY
-        if (pos[i, 0] < prm[P.XMIN] or pos[i, 0] > prm[P.XMAX]
-                or pos[i, 1] < prm[P.YMIN] or pos[i, 1] > prm[P.YMAX]):
-            err[0] = i
-            err[1] = pos[i, 0] if (pos[i, 0] < prm[P.XMIN] or pos[i, 0] > prm[P.XMAX]) else pos[i, 1]
-            return P.LEFT_DOMAIN
-    return P.OK
+        x = pos[i, 0]
+        y = pos[i, 1]
+        v2 = vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1]
+        # every comparison is False for NaN, so "not (inside)" catches NaN/Inf too
+        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(omega[i]) < 1e300)
+        if not ok and alive[i]:
+            bad = i
+            break
+    if bad < 0:
+        return P.OK
+    i = bad
+    s = pos[i, 0] + pos[i, 1] + vel[i, 0] + vel[i, 1] + omega[i]
+    if not math.isfinite(s):
+        err[0] = i
+        err[1] = s
+        return P.NAN_FOUND
+    v2 = vel[i, 0] ** 2 + vel[i, 1] ** 2
+    if v2 > vmax2:
+        err[0] = i
+        err[1] = math.sqrt(v2)
+        return P.RUNAWAY
+    err[0] = i
+    err[1] = pos[i, 0] if (pos[i, 0] < x0 or pos[i, 0] > x1) else pos[i, 1]
+    return P.LEFT_DOMAIN
 
 
 @njit(cache=True)

@@ -9,18 +9,13 @@ from numba import njit
 
 
 @njit(cache=True)
-def _cell_of(x, y, xmin, ymin, cs, ncx, ncy):
-    cx = int((x - xmin) / cs)
-    cy = int((y - ymin) / cs)
-    cx = min(max(cx, 0), ncx - 1)   # balls outside the domain are caught by the guards
-    cy = min(max(cy, 0), ncy - 1)
-    return cx, cy
-
-
-@njit(cache=True)
 def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out_j):
-    """Fill out_i/out_j with pairs i < j closer than r_i + r_j + skin (sorted).
-    Pebbles of one clump are skipped. Returns the count, or -needed if over capacity."""
+    """Fill out_i/out_j with pairs i < j closer than r_i + r_j + skin, sorted by (i, j).
+    Pebbles of one clump are skipped. Returns the count, or -needed if over capacity.
+
+    Cells of side >= 2 r_max + skin; a half stencil (own cell + 4 neighbours) visits each
+    pair once from cell-ordered copies of the coordinates (cache friendly); the pairs are
+    then counting-sorted by i and each short row insertion-sorted by j."""
     n = pos.shape[0]
     rmax = 0.0
     for i in range(n):
@@ -29,15 +24,14 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
     cs = 2.0 * rmax + skin
     ncx = max(1, int((xmax - xmin) / cs))
     ncy = max(1, int((ymax - ymin) / cs))
-    cs = max((xmax - xmin) / ncx, (ymax - ymin) / ncy)
-    ncx = max(1, int((xmax - xmin) / cs) + 1)
-    ncy = max(1, int((ymax - ymin) / cs) + 1)
-    # counting sort of balls into cells
+    csx = (xmax - xmin) / ncx
+    csy = (ymax - ymin) / ncy
     start = np.zeros(ncx * ncy + 1, np.int64)
     cell = np.empty(n, np.int64)
     for i in range(n):
         if alive[i]:
-            cx, cy = _cell_of(pos[i, 0], pos[i, 1], xmin, ymin, cs, ncx, ncy)
+            cx = min(max(int((pos[i, 0] - xmin) / csx), 0), ncx - 1)
+            cy = min(max(int((pos[i, 1] - ymin) / csy), 0), ncy - 1)
             cell[i] = cy * ncx + cx
             start[cell[i] + 1] += 1
         else:
@@ -45,60 +39,82 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
     for c in range(ncx * ncy):
         start[c + 1] += start[c]
     fill = start[:-1].copy()
-    items = np.empty(n, np.int64)
-    for i in range(n):          # ascending i inside each cell
-        if cell[i] >= 0:
-            items[fill[cell[i]]] = i
-            fill[cell[i]] += 1
-    cap = out_i.shape[0]
-    cnt = 0
-    buf = np.empty(256, np.int64)
+    m = start[ncx * ncy]
+    ids = np.empty(m, np.int64)
+    xs = np.empty(m)
+    ys = np.empty(m)
+    rs = np.empty(m)
+    cl = np.empty(m, np.int64)
     for i in range(n):
-        if cell[i] < 0:
-            continue
-        cx = cell[i] % ncx
-        cy = cell[i] // ncx
-        nb = 0
-        for dy in range(-1, 2):
-            yy = cy + dy
-            if yy < 0 or yy >= ncy:
-                continue
-            for dx in range(-1, 2):
-                xx = cx + dx
-                if xx < 0 or xx >= ncx:
-                    continue
-                c = yy * ncx + xx
-                for q in range(start[c], start[c + 1]):
-                    j = items[q]
-                    if j <= i:
-                        continue
-                    if clump[i] >= 0 and clump[i] == clump[j]:
-                        continue
-                    ddx = pos[j, 0] - pos[i, 0]
-                    ddy = pos[j, 1] - pos[i, 1]
-                    cut = rad[i] + rad[j] + skin
-                    if ddx * ddx + ddy * ddy < cut * cut:
-                        if nb == buf.shape[0]:
-                            nbuf = np.empty(2 * nb, np.int64)
-                            nbuf[:nb] = buf
-                            buf = nbuf
-                        buf[nb] = j
-                        nb += 1
-        # insertion sort: rows are short
-        for a in range(1, nb):
-            v = buf[a]
-            b = a - 1
-            while b >= 0 and buf[b] > v:
-                buf[b + 1] = buf[b]
-                b -= 1
-            buf[b + 1] = v
-        for a in range(nb):
-            if cnt < cap:
-                out_i[cnt] = i
-                out_j[cnt] = buf[a]
-            cnt += 1
+        c = cell[i]
+        if c >= 0:
+            q = fill[c]
+            ids[q] = i
+            xs[q] = pos[i, 0]
+            ys[q] = pos[i, 1]
+            rs[q] = rad[i]
+            cl[q] = clump[i]
+            fill[c] = q + 1
+    # pass 1: pairs as (min, max) in cell order, into scratch
+    cap = out_i.shape[0]
+    pa = np.empty(max(cap, 16), np.int64)
+    pb = np.empty(max(cap, 16), np.int64)
+    cnt = 0
+    for cy in range(ncy):
+        for cx in range(ncx):
+            c = cy * ncx + cx
+            for q in range(start[c], start[c + 1]):
+                xq = xs[q]
+                yq = ys[q]
+                # own cell (later entries) and the 4 forward neighbours
+                for nb in range(5):
+                    if nb == 0:
+                        c2 = c
+                        lo = q + 1
+                    else:
+                        dx = 1 if nb == 1 else (nb - 3)      # (1,0) (-1,1) (0,1) (1,1)
+                        dy = 0 if nb == 1 else 1
+                        xx = cx + dx
+                        yy = cy + dy
+                        if xx < 0 or xx >= ncx or yy >= ncy:
+                            continue
+                        c2 = yy * ncx + xx
+                        lo = start[c2]
+                    for r in range(lo, start[c2 + 1]):
+                        ddx = xs[r] - xq
+                        ddy = ys[r] - yq
+                        cut = rs[q] + rs[r] + skin
+                        if ddx * ddx + ddy * ddy < cut * cut:
+                            if cl[q] >= 0 and cl[q] == cl[r]:
+                                continue
+                            if cnt < pa.shape[0]:
+                                a = ids[q]
+                                b = ids[r]
+                                pa[cnt] = min(a, b)
+                                pb[cnt] = max(a, b)
+                            cnt += 1
     if cnt > cap:
         return -cnt
+    # pass 2: counting sort by i, then sort each row by j
+    row = np.zeros(n + 1, np.int64)
+    for k in range(cnt):
+        row[pa[k] + 1] += 1
+    for i in range(n):
+        row[i + 1] += row[i]
+    put = row[:-1].copy()
+    for k in range(cnt):
+        i = pa[k]
+        out_i[put[i]] = i
+        out_j[put[i]] = pb[k]
+        put[i] += 1
+    for i in range(n):
+        for a in range(row[i] + 1, row[i + 1]):
+            v = out_j[a]
+            b = a - 1
+            while b >= row[i] and out_j[b] > v:
+                out_j[b + 1] = out_j[b]
+                b -= 1
+            out_j[b + 1] = v
     return cnt
 
 
@@ -120,14 +136,32 @@ def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s):
     """Ball-segment pairs closer than r + skin, sorted by (ball, segment).
     Returns the count or -needed. O(N * segments): segments are few in a rig."""
     cap = out_i.shape[0]
+    ns = seg.shape[0]
+    rmax = 0.0
+    for i in range(pos.shape[0]):
+        if alive[i] and rad[i] > rmax:
+            rmax = rad[i]
+    # bounding boxes of the segments grown by r_max + skin: a cheap reject before the
+    # exact distance (most balls are far from most segments)
+    box = np.empty((ns, 4))
+    for s in range(ns):
+        g = rmax + skin
+        box[s, 0] = min(seg[s, 0], seg[s, 2]) - g
+        box[s, 1] = min(seg[s, 1], seg[s, 3]) - g
+        box[s, 2] = max(seg[s, 0], seg[s, 2]) + g
+        box[s, 3] = max(seg[s, 1], seg[s, 3]) + g
     cnt = 0
     for i in range(pos.shape[0]):
         if not alive[i]:
             continue
-        for s in range(seg.shape[0]):
-            cx, cy, u = seg_closest(pos[i, 0], pos[i, 1], seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
-            dx = pos[i, 0] - cx
-            dy = pos[i, 1] - cy
+        px = pos[i, 0]
+        py = pos[i, 1]
+        for s in range(ns):
+            if px < box[s, 0] or px > box[s, 2] or py < box[s, 1] or py > box[s, 3]:
+                continue
+            cx, cy, u = seg_closest(px, py, seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+            dx = px - cx
+            dy = py - cy
             cut = rad[i] + skin
             if dx * dx + dy * dy < cut * cut:
                 if cnt < cap:
@@ -190,10 +224,11 @@ def rebuild(pos, rad, alive, clump, pos0, skin, xmin, ymin, xmax, ymax,
         return 2, -wcnt
     old_h = p_h[:n_old].copy()
     merge_history(p_i, p_j, old_h, n_old, new_i, new_j, cnt, p_h)
+    nb = bond_i.shape[0]
     for k in range(cnt):
         p_i[k] = new_i[k]
         p_j[k] = new_j[k]
-        p_bond[k] = find_bond(bond_i, bond_j, new_i[k], new_j[k])
+        p_bond[k] = find_bond(bond_i, bond_j, new_i[k], new_j[k]) if nb > 0 else -1
     p_n[0] = cnt
     old_wh = w_h[:wn_old].copy()
     merge_history(w_i, w_s, old_wh, wn_old, nw_i, nw_s, wcnt, w_h)

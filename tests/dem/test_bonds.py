@@ -1,0 +1,102 @@
+"""Verification cases 8-10: flat joints in tension, in shear (with/without compression),
+and a bonded chain cantilever vs the discrete beam formula."""
+import math
+
+import numpy as np
+
+from ballaststudy.dem import FlatJointMaterial, Simulation
+
+R, RHO = 0.01, 2950.0
+
+
+def pair(fj, n_elements=1, gap=0.0):
+    """Two balls of one stone, ball 0 held, ball 1 velocity-controlled (all dofs)."""
+    sim = Simulation(gravity=(0, 0), n_elements=n_elements, domain=(-1, -1, 1, 1))
+    sim.add_balls([0.0, 2 * R + gap], [0.0, 0.0], [R, R], RHO, stone_id=0)
+    assert sim.install_flat_joints(fj) == 1
+    sim.set_ball_velocity([0, 1], vel=(0.0, 0.0), omega=0.0, hold=7)
+    return sim
+
+
+def pull_until_break(sim, vel, per=1):
+    """Move ball 1 at ``vel``; return (gap history, bond normal-force history)."""
+    rec = []
+
+    def probe(s):
+        rec.append((s.balls.pos[1, 0] - 2 * R, s.bonds.fn[0].sum(), s.bonds.fs[0].sum(),
+                    int(s.log.n[0])))
+        return s.log.n[0] > 0
+    sim.set_ball_velocity(1, vel=vel)
+    sim.run(200_000, callback=probe, every=per)
+    return np.array(rec)
+
+
+def test_case8_tension_slope_and_strength():
+    fj = FlatJointMaterial()                    # Table 4.2 hard rock
+    for ne in (1, 3):
+        sim = pair(fj, n_elements=ne)
+        rec = pull_until_break(sim, (2e-3, 0.0))
+        area = 2 * R * 1.0
+        kn_a = fj.E / (2 * R) * area            # k_n A with k_n = E*/L, L = R1 + R2
+        pre = rec[rec[:, 3] == 0]
+        slope = np.polyfit(pre[:, 0], pre[:, 1], 1)[0]
+        assert abs(slope - kn_a) <= 0.01 * kn_a, f"N={ne}: slope measured {slope:.5e} analytical k_n A {kn_a:.5e}"
+        f_break = pre[-1, 1] + (rec[-1, 0] - pre[-1, 0]) * kn_a   # force at the breaking step
+        ref = fj.sigma_c * area
+        assert abs(f_break - ref) <= 0.01 * ref, f"N={ne}: breaks at {f_break:.5e} N, analytical sigma_c A {ref:.5e} N"
+        log = sim.breakages()
+        assert len(log["mode"]) == ne and set(log["mode"]) == {"tension"}, f"modes {log['mode']}"
+        assert np.all(log["stress"] >= fj.sigma_c) and np.all(log["stress"] <= 1.01 * fj.sigma_c)
+        assert np.all(log["i"] == 0) and np.all(log["j"] == 1) and np.all(log["stone"] == 0)
+        # broken, still closed: no tension any more, interface removed once apart > g_i
+        sim.run(2000)
+        assert sim.bonds.fn[0].sum() == 0.0
+
+
+def shear_until_break(fj, compress):
+    sim = pair(fj)
+    area = 2 * R
+    if compress:       # push ball 1 in to a compressive stress, then hold the distance
+        sim.set_ball_velocity(1, vel=(-1e-3, 0.0))
+        target = 0.5 * fj.c / (fj.E / (2 * R))
+        sim.run(10_000, callback=lambda s: s.balls.pos[1, 0] - 2 * R <= -target, every=1)
+    rec = pull_until_break(sim, (0.0, 5e-3))
+    sig = sim.bonds.fn[0, 0] / area              # normal stress at failure (tension +)
+    log = sim.breakages()
+    return rec, sig, log, area
+
+
+def test_case9_shear_strength_with_and_without_compression():
+    for phi, compress in ((0.0, False), (30.0, True), (0.0, True)):
+        fj = FlatJointMaterial(phi_deg=phi)
+        rec, sig, log, area = shear_until_break(fj, compress)
+        tau_c = fj.c - sig * math.tan(math.radians(phi))
+        assert list(log["mode"]) == ["shear"], f"phi={phi}: modes {log['mode']}"
+        tau = log["stress"][0]
+        assert abs(tau - tau_c) <= 0.01 * tau_c, \
+            f"phi={phi} compress={compress}: tau at failure {tau:.5e} Pa, analytical c - sigma tan(phi) {tau_c:.5e} Pa (sigma {sig:.4e})"
+        if compress and phi > 0:
+            assert tau > 1.05 * fj.c, "compression did not raise the shear strength"
+        f_s = abs(rec[-2, 2])                    # shear force one step before failure
+        assert abs(f_s - tau_c * area) <= 0.01 * tau_c * area, f"F_s {f_s:.5e} vs {(tau_c * area):.5e}"
+
+
+def test_case10_cantilever_chain():
+    """n+1 equal disks, first held, small tip load F: delta = F sum s_j^2 / k_theta +
+    n F / (k_s A), k_theta = k_n t (2 Rbar)^3 / 12."""
+    n, F = 4, 1.0
+    fj = FlatJointMaterial(E=1.0e8, kappa=2.5)
+    sim = Simulation(gravity=(0, 0), damping=0.7, domain=(-1, -1, 1, 1))
+    x = 2 * R * np.arange(n + 1)
+    sim.add_balls(x, np.zeros(n + 1), np.full(n + 1, R), RHO, stone_id=0)
+    assert sim.install_flat_joints(fj) == n
+    sim.set_ball_velocity(0, vel=(0, 0), omega=0.0, hold=7)
+    sim.apply_force(n, (0.0, -F))
+    kn = fj.E / (2 * R)
+    area = 2 * R
+    k_theta = kn * 1.0 * (2 * R) ** 3 / 12
+    s = 2 * R * n - (2 * np.arange(1, n + 1) - 1) * R
+    ref = F * (s ** 2).sum() / k_theta + n * F / (kn / fj.kappa * area)
+    sim.run(200_000, callback=lambda s: np.abs(s.balls.vel).max() < 1e-9 * ref / s.dt, every=2000)
+    delta = -sim.balls.pos[n, 1]
+    assert abs(delta - ref) <= 0.02 * ref, f"tip deflection measured {delta:.5e} m analytical {ref:.5e} m"
