@@ -43,6 +43,10 @@ def _describe(error):
         hi_s = "" if hi is None else (f"< {hi}" if "exclusiveMaximum" in s else f"<= {hi}")
         return f"{error.instance!r} is out of range; allowed: {' and '.join(x for x in (lo_s, hi_s) if x)}"
     if error.validator == "oneOf":
+        # a value of the right kind but out of range: report that, not the choice of kinds
+        inner = [c for c in error.context if c.validator != "type"]
+        if inner:
+            return _describe(max(inner, key=lambda c: len(c.absolute_path)))
         return f"{error.instance!r} is not allowed here; {error.schema.get('description', 'see the schema')}"
     return error.message
 
@@ -54,7 +58,9 @@ def validate(data, schema_name, file):
     errors = sorted(validator.iter_errors(data), key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
     if errors:
         e = errors[0]
-        raise ConfigError(file, _key(e.absolute_path), _describe(e))
+        inner = [c for c in (e.context or []) if c.validator != "type"]
+        where = max(inner, key=lambda c: len(c.absolute_path)) if e.validator == "oneOf" and inner else e
+        raise ConfigError(file, _key(where.absolute_path), _describe(e))
     _fill_defaults(data, schema)
     return data
 

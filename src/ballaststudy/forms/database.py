@@ -9,7 +9,6 @@ import numpy as np
 import trimesh
 import xarray as xr
 
-from ..atomic import atomic_path
 from ..standards import GRADING_SIEVES_MM
 from . import geometry
 
@@ -96,8 +95,7 @@ def _group(objective, stone):
 
 
 def write_netcdf(ds, path):
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="netcdf4")
+    ds.to_netcdf(path, engine="netcdf4")
 
 
 def stone_meshes(ds):
@@ -118,9 +116,8 @@ def stone_profiles(ds):
 
 def write_stl_archive(ds, path):
     """A zip with one binary STL per stone (stone_00000.stl, ...), for use in other DEM codes."""
-    with atomic_path(path) as tmp:
-        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-            for i, mesh in enumerate(stone_meshes(ds)):
-                buf = io.BytesIO()
-                mesh.export(buf, file_type="stl")
-                zf.writestr(f"stone_{i:05d}.stl", buf.getvalue())
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for i, mesh in enumerate(stone_meshes(ds)):
+            buf = io.BytesIO()
+            mesh.export(buf, file_type="stl")
+            zf.writestr(f"stone_{i:05d}.stl", buf.getvalue())

@@ -21,6 +21,9 @@ from .objective import FormParams, Objective, ObjectiveError
 
 _MARGIN = 0.03          # targets keep this relative distance from every class boundary
 _MAX_BATCHES = 20000    # per database; far above what any feasible objective needs
+# weights of the missing masses when a last stone is weighed: 1/tolerance^2 of the targets
+# (grading and SI within 1 pp, LI within 0.5 pp), so LI counts four times
+_WEIGHT = {"long": 4.0}
 
 
 class GenerationError(RuntimeError):
@@ -55,24 +58,38 @@ class _Ledger:
                       "long": {True: g.long, False: g.mass - g.long}}
         if g.flat is not None:
             self.sides["flat"] = {True: g.flat, False: g.mass - g.flat}
+        self.closed = set()     # (flag, value) sides given up: no stone fits what they lack
+
+    def _lacking(self, name, value):
+        return self.sides[name][value] > 0 and (name, value) not in self.closed
 
     def combos(self):
-        """All flag combinations, most-lacking first (sum of the missing masses of the chosen
-        sides), those whose every side still lacks mass before the others."""
+        """All flag combinations, best first: those whose every side still lacks mass, then
+        those touching the fewest given-up sides; among equals the most-lacking (sum of the
+        missing masses of the chosen sides)."""
         names = list(self.sides)
         scored = []
         for values in itertools.product((True, False), repeat=len(names)):
             flags = dict(zip(names, values))
-            lacking = all(self.sides[n][v] > 0 for n, v in flags.items())
-            scored.append((not lacking, -sum(self.sides[n][v] for n, v in flags.items()), flags))
-        return [f for *_, f in sorted(scored, key=lambda t: t[:2])]
+            lacking = all(self._lacking(n, v) for n, v in flags.items())
+            n_closed = sum((n, v) in self.closed for n, v in flags.items())
+            missing = sum(self.sides[n][v] for n, v in flags.items())
+            scored.append(((not lacking, n_closed, -missing), flags))
+        return [f for _, f in sorted(scored, key=lambda t: t[0])]
 
     def _open_sides(self, flags):
-        return {n: self.sides[n][v] for n, v in flags.items() if self.sides[n][v] > 0}
+        return {n: self.sides[n][v] for n, v in flags.items() if self._lacking(n, v)}
 
     def cap(self, flags):
-        """The mass the next stone of class `flags` may have without overfilling a lacking side."""
-        return min([self.total, *self._open_sides(flags).values()])
+        """The mass the next stone of class `flags` may have without overfilling a side."""
+        return min([self.total, *(m for n, v in flags.items() if (m := self.sides[n][v]) > 0)])
+
+    def gain(self, stone):
+        """How much taking the stone reduces the weighted sum of squared missing masses (group
+        total and the stone's side of every flag): > 0 means the group nears its objective."""
+        missing = [(1.0, self.total)] + [(_WEIGHT.get(n, 1.0), side[bool(getattr(stone, n))])
+                                         for n, side in self.sides.items()]
+        return sum(w * (r * r - (r - stone.mass) ** 2) for w, r in missing)
 
     def book(self, stone):
         self.total -= stone.mass
@@ -86,7 +103,7 @@ class _Ledger:
         if not open_sides or min(open_sides.values()) >= self.total:
             return False
         name = min(open_sides, key=open_sides.get)
-        self.sides[name][flags[name]] = 0.0
+        self.closed.add((name, flags[name]))
         return True
 
 
@@ -243,8 +260,8 @@ class FormGenerator:
                     break
         self._learn(measured, semi, [s.volume / (s.a * s.b * s.c) for s in stones])
         if aim and stones:
-            best = min(stones, key=lambda s: abs(s.mass - cap))
-            if abs(best.mass - cap) < cap:
+            best = max(stones, key=ledger.gain)
+            if ledger.gain(best) > 0:
                 self._accept(best, ledger)
                 return True
             return False

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..standards import (
-    LONG_STONE_LENGTH_MM, SIZE_GROUP_BOUNDS_MM, category_target, grading_target,
+    LONG_STONE_LENGTH_MM, NON_CUBIC_RATIO, SIZE_GROUP_BOUNDS_MM, category_target, grading_target,
 )
 
 
@@ -109,6 +109,20 @@ def _allocate_long(group_mass, uppers_mm, long_total, params):
     return long
 
 
+def _check_shapes_reachable(si, fi, params):
+    """Non-cubic needs a/c > 3 and flat needs c < slot (about D/2, b >= d = D/1.25 .. D/2)
+    inside the drawn bounds a/b <= ab_ratio_max, c/b >= cb_ratio_min (generator margins 6 %)."""
+    if si > 0 and params.ab_ratio_max / params.cb_ratio_min <= NON_CUBIC_RATIO * 1.1:
+        raise ObjectiveError("shape_index", (
+            f"SI {si:g} % cannot be met: a/c reaches at most {params.ab_ratio_max / params.cb_ratio_min:.3g} "
+            f"with forms.ab_ratio_max {params.ab_ratio_max:g} and forms.cb_ratio_min {params.cb_ratio_min:g}, "
+            f"non-cubic needs a/c > {NON_CUBIC_RATIO:g}"))
+    if fi is not None and fi > 0 and params.cb_ratio_min >= 0.6:
+        raise ObjectiveError("flakiness_index", (
+            f"FI {fi:g} % cannot be met: flat stones need c below about half the upper sieve, "
+            f"but forms.cb_ratio_min is {params.cb_ratio_min:g} (must be < 0.6 for FI > 0)"))
+
+
 def build_objective(name, definition, params=FormParams()):
     """Objective from one parsed database definition (a dict as in databases.yaml).
 
@@ -130,6 +144,7 @@ def build_objective(name, definition, params=FormParams()):
     if fi is not None and si > fi:
         raise ObjectiveError("shape_index", f"SI {si:g} % exceeds FI {fi:g} %: a non-cubic stone "
                              "(a/c > 3) is stricter than a flat one, so SI <= FI (thesis 3.3)")
+    _check_shapes_reachable(si, fi, params)
     materials = tuple(Material(n, float(m["mass_fraction"]), float(m["density_kg_m3"]))
                       for n, m in definition["materials"].items())
     fractions = sum(m.mass_fraction for m in materials)

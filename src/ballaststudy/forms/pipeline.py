@@ -3,6 +3,7 @@
 import json
 from pathlib import Path
 
+from ..atomic import atomic_path
 from ..provenance import Recorder
 from .database import to_dataset, write_netcdf, write_stl_archive
 from .generator import generate
@@ -25,8 +26,10 @@ def generate_database(name, definition, seed, params, out_dir, config_files=(), 
     recorder.finish()
     ds = to_dataset(objective, stones, seed, params, recorder.json())
     nc, stl = output_paths(out_dir, name)
-    write_stl_archive(ds, stl)
-    write_netcdf(ds, nc)
+    # both files appear together or not at all
+    with atomic_path(stl) as stl_tmp, atomic_path(nc) as nc_tmp:
+        write_stl_archive(ds, stl_tmp)
+        write_netcdf(ds, nc_tmp)
     recorder.write_beside(nc)
     return nc
 
