@@ -1,0 +1,66 @@
+"""Breakage rate (thesis 4.5.1, eqs. 4.6-4.8, l. 1040-1048).
+
+BR_T = FJ_T / FJ_Total, BR_S = FJ_S / FJ_Total, BR = BR_T + BR_S, where FJ_T / FJ_S are
+the flat-joint bonds broken in tension / shear and FJ_Total all flat-joint bonds. The
+equations define plain ratios, so they are returned as fractions (units "1"); the thesis'
+figures quote them in percent ("smaller than 1%", l. 1229) - multiply by 100 to plot.
+
+The engine logs one record per broken flat-joint *element*. The thesis uses N_r = 1
+element per bond (Table 4.2), so a record is a broken bond; for N_r > 1 pass
+``n_elements_per_bond`` and the denominator becomes all installed elements.
+"""
+import numpy as np
+
+MODE_TENSION = 1   # same codes as ballaststudy.dem.bonds
+MODE_SHEAR = 2
+_NAMES = {"tension": MODE_TENSION, "shear": MODE_SHEAR}
+
+
+def _modes(mode):
+    m = np.asarray(mode)
+    if m.dtype.kind in "USO":
+        try:
+            m = np.array([_NAMES[str(s).lower()] for s in m], dtype=np.int64)
+        except KeyError as err:
+            raise ValueError(f"breakage mode {err} is not 'tension' or 'shear'") from None
+    m = m.astype(np.int64)
+    bad = ~np.isin(m, (MODE_TENSION, MODE_SHEAR))
+    if bad.any():
+        raise ValueError(f"breakage mode {m[bad][0]} is not 1 (tension) or 2 (shear)")
+    return m
+
+
+def breakage_rate(break_mode, break_step, n_bonds_installed, cycle_bounds, n_elements_per_bond=1):
+    """Cumulative breakage rates at the end of each cycle and breakages per cycle.
+
+    break_mode: (r,) per breakage record, 1/'tension' or 2/'shear'.
+    break_step: (r,) calculation step of each record.
+    n_bonds_installed: flat-joint bonds installed when the stones were built (FJ_Total
+        for N_r = 1).
+    cycle_bounds: (K+1,) steps; cycle k spans cycle_bounds[k] <= step < cycle_bounds[k+1].
+    Breakages before cycle_bounds[0] (assembly, static pre-loading) count in the
+    cumulative rates - a bond broken then is broken - but in no cycle's count.
+
+    Returns dict of (K,) arrays: breakage_rate_tension, breakage_rate_shear,
+    breakage_rate (fractions), breakages_per_cycle, broken_tension, broken_shear (counts).
+    """
+    mode = _modes(break_mode)
+    step = np.asarray(break_step, dtype=np.int64)
+    if mode.shape != step.shape:
+        raise ValueError(f"break_mode {mode.shape} and break_step {step.shape} differ in length")
+    bounds = np.asarray(cycle_bounds, dtype=np.int64)
+    if bounds.ndim != 1 or bounds.size < 1 or np.any(np.diff(bounds) < 0):
+        raise ValueError("cycle_bounds must be a non-decreasing 1D array of steps")
+    total = int(n_bonds_installed) * int(n_elements_per_bond)
+    if total <= 0:
+        raise ValueError(f"n_bonds_installed * n_elements_per_bond = {total}; must be > 0")
+    ends = bounds[1:]
+    t_steps = np.sort(step[mode == MODE_TENSION])
+    s_steps = np.sort(step[mode == MODE_SHEAR])
+    n_t = np.searchsorted(t_steps, ends, side="left")   # records with step < end
+    n_s = np.searchsorted(s_steps, ends, side="left")
+    all_steps = np.sort(step)
+    cum = np.searchsorted(all_steps, bounds, side="left")
+    return dict(breakage_rate_tension=n_t / total, breakage_rate_shear=n_s / total,
+                breakage_rate=(n_t + n_s) / total, breakages_per_cycle=np.diff(cum),
+                broken_tension=n_t, broken_shear=n_s)
