@@ -3,7 +3,7 @@
 BR_T = FJ_T / FJ_Total, BR_S = FJ_S / FJ_Total, BR = BR_T + BR_S, where FJ_T / FJ_S are
 the flat-joint bonds broken in tension / shear and FJ_Total all flat-joint bonds. The
 equations define plain ratios, so they are returned as fractions (units "1"); the thesis'
-figures quote them in percent ("smaller than 1%", l. 1229) - multiply by 100 to plot.
+figures quote them in percent ("smaller than 1%", l. 1228) - multiply by 100 to plot.
 
 The engine logs one record per broken flat-joint *element*. The thesis uses N_r = 1
 element per bond (Table 4.2), so a record is a broken bond; for N_r > 1 pass

@@ -1,4 +1,4 @@
-"""All behaviours of one loading cycle from one snapshot (thesis 4.2.3, l. 1003: the
+"""All behaviours of one loading cycle from one snapshot (thesis 4.2.3, l. 935-937: the
 metrics are computed "at the end of every loading cycle").
 
 ``compute_cycle`` is a compute: a pure function of the snapshot (plain numpy arrays the
@@ -107,7 +107,7 @@ def compute_cycle(snapshot, params=MetricsParams(), y_reference=None):
     p = params
     out = {}
 
-    # settlement (thesis l. 1036; Fig. 4-2 b reading at 30 kN)
+    # settlement (thesis l. 1036; Fig. 4-2 b reading at 30 kN, l. 802)
     y_c, y_pk, f_pk = loading_branch_crossing(s["load_y"], s["load_force"], p.settlement_force)
     ref = y_c if y_reference is None else float(y_reference)
     out.update(settlement=ref - y_c, displacement_at_peak=ref - y_pk, peak_force=f_pk, y_at_level=y_c)

@@ -1,6 +1,6 @@
 """Settlement: vertical displacement of the loading ball (thesis 4.5.1, l. 1036; 4.2.3).
 
-Like the box test (thesis 4.1, Fig. 4-2 b: "the position of the pressing plate by 30 kN of
+Like the box test (thesis 4.1, l. 802, Fig. 4-2 b: "the position of the pressing plate by 30 kN of
 every loading step"), the settlement of a cycle is read where the loading-ball force
 crosses 30 kN on the loading (rising) branch, relative to that position in cycle 0,
 positive downward.
