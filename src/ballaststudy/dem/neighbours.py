@@ -1,8 +1,8 @@
 """Neighbour search: cell list + Verlet lists, O(N) per build.
 
-Pair lists are kept sorted by (i, j) so that contact history survives a rebuild by a
-linear merge with the previous list, and so that forces are always summed in the same
-order (bitwise reproducible whatever the rebuild timing).
+Pair lists are grouped by i (ascending) so that contact history survives a rebuild by a
+search in the short old row of i. The order only depends on the positions at the build,
+so a run is bitwise reproducible (the checkpoint keeps the list and the build positions).
 """
 import numpy as np
 from numba import njit
@@ -10,12 +10,13 @@ from numba import njit
 
 @njit(cache=True)
 def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out_j):
-    """Fill out_i/out_j with pairs i < j closer than r_i + r_j + skin, sorted by (i, j).
-    Pebbles of one clump are skipped. Returns the count, or -needed if over capacity.
+    """Fill out_i/out_j with pairs i < j closer than r_i + r_j + skin, grouped by i
+    (ascending). Pebbles of one clump are skipped. Returns the count, or -needed if over
+    capacity.
 
     Cells of side >= 2 r_max + skin; a half stencil (own cell + 4 neighbours) visits each
     pair once from cell-ordered copies of the coordinates (cache friendly); the pairs are
-    then counting-sorted by i and each short row insertion-sorted by j."""
+    then counting-sorted by i."""
     n = pos.shape[0]
     rmax = 0.0
     for i in range(n):
@@ -55,10 +56,12 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
             rs[q] = rad[i]
             cl[q] = clump[i]
             fill[c] = q + 1
-    # pass 1: pairs as (min, max) in cell order, into scratch
+    # pass 1: pairs as (min, max) in cell order, into scratch. Branch-free append (write
+    # always, advance by the test): the in/out test is unpredictable, the store is cheap.
     cap = out_i.shape[0]
-    pa = np.empty(max(cap, 16), np.int64)
-    pb = np.empty(max(cap, 16), np.int64)
+    room = max(cap, 16)
+    pa = np.empty(room + 1, np.int64)
+    pb = np.empty(room + 1, np.int64)
     cnt = 0
     for cy in range(ncy):
         for cx in range(ncx):
@@ -66,6 +69,9 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
             for q in range(start[c], start[c + 1]):
                 xq = xs[q]
                 yq = ys[q]
+                rq = rs[q] + skin
+                cq = cl[q]
+                iq = ids[q]
                 # own cell (later entries) and the 4 forward neighbours
                 for nb in range(5):
                     if nb == 0:
@@ -83,38 +89,27 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
                     for r in range(lo, start[c2 + 1]):
                         ddx = xs[r] - xq
                         ddy = ys[r] - yq
-                        cut = rs[q] + rs[r] + skin
-                        if ddx * ddx + ddy * ddy < cut * cut:
-                            if cl[q] >= 0 and cl[q] == cl[r]:
-                                continue
-                            if cnt < pa.shape[0]:
-                                a = ids[q]
-                                b = ids[r]
-                                pa[cnt] = min(a, b)
-                                pb[cnt] = max(a, b)
-                            cnt += 1
+                        cut = rq + rs[r]
+                        hit = (ddx * ddx + ddy * ddy < cut * cut) & ((cq < 0) | (cq != cl[r]))
+                        k = min(cnt, room)
+                        ir = ids[r]
+                        pa[k] = min(iq, ir)
+                        pb[k] = max(iq, ir)
+                        cnt += 1 if hit else 0
     if cnt > cap:
         return -cnt
-    # pass 2: counting sort by i, then sort each row by j
+    # pass 2: counting sort by i (rows in a deterministic order; j order within a row
+    # follows the cell traversal, which only depends on the positions)
     row = np.zeros(n + 1, np.int64)
     for k in range(cnt):
         row[pa[k] + 1] += 1
     for i in range(n):
         row[i + 1] += row[i]
-    put = row[:-1].copy()
     for k in range(cnt):
         i = pa[k]
-        out_i[put[i]] = i
-        out_j[put[i]] = pb[k]
-        put[i] += 1
-    for i in range(n):
-        for a in range(row[i] + 1, row[i + 1]):
-            v = out_j[a]
-            b = a - 1
-            while b >= row[i] and out_j[b] > v:
-                out_j[b + 1] = out_j[b]
-                b -= 1
-            out_j[b + 1] = v
+        out_i[row[i]] = i
+        out_j[row[i]] = pb[k]
+        row[i] += 1
     return cnt
 
 
@@ -174,18 +169,25 @@ def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s):
 
 
 @njit(cache=True)
-def merge_history(old_i, old_j, old_h, n_old, new_i, new_j, n_new, out_h):
-    """out_h[k] = history of (new_i[k], new_j[k]) in the old sorted list, else 0."""
-    a = 0
+def merge_history(old_i, old_j, old_h, n_old, new_i, new_j, n_new, out_h, n_rows):
+    """out_h[k] = history of (new_i[k], new_j[k]) in the old list (grouped by i), else 0.
+    Rows are short, so a linear search in the old row of i is the fastest match."""
+    row = np.zeros(n_rows + 1, np.int64)
+    for a in range(n_old):
+        row[old_i[a] + 1] += 1
+    for i in range(n_rows):
+        row[i + 1] += row[i]
+    nc = out_h.shape[1]
     for k in range(n_new):
-        while a < n_old and (old_i[a] < new_i[k] or (old_i[a] == new_i[k] and old_j[a] < new_j[k])):
-            a += 1
-        if a < n_old and old_i[a] == new_i[k] and old_j[a] == new_j[k]:
-            for c in range(out_h.shape[1]):
-                out_h[k, c] = old_h[a, c]
-        else:
-            for c in range(out_h.shape[1]):
-                out_h[k, c] = 0.0
+        i = new_i[k]
+        j = new_j[k]
+        found = -1
+        for a in range(row[i], row[i + 1]):
+            if old_j[a] == j:
+                found = a
+                break
+        for c in range(nc):
+            out_h[k, c] = old_h[found, c] if found >= 0 else 0.0
 
 
 @njit(cache=True)
@@ -223,7 +225,7 @@ def rebuild(pos, rad, alive, clump, pos0, skin, xmin, ymin, xmax, ymax,
     if wcnt < 0:
         return 2, -wcnt
     old_h = p_h[:n_old].copy()
-    merge_history(p_i, p_j, old_h, n_old, new_i, new_j, cnt, p_h)
+    merge_history(p_i, p_j, old_h, n_old, new_i, new_j, cnt, p_h, pos.shape[0])
     nb = bond_i.shape[0]
     for k in range(cnt):
         p_i[k] = new_i[k]
@@ -231,7 +233,7 @@ def rebuild(pos, rad, alive, clump, pos0, skin, xmin, ymin, xmax, ymax,
         p_bond[k] = find_bond(bond_i, bond_j, new_i[k], new_j[k]) if nb > 0 else -1
     p_n[0] = cnt
     old_wh = w_h[:wn_old].copy()
-    merge_history(w_i, w_s, old_wh, wn_old, nw_i, nw_s, wcnt, w_h)
+    merge_history(w_i, w_s, old_wh, wn_old, nw_i, nw_s, wcnt, w_h, pos.shape[0])
     for k in range(wcnt):
         w_i[k] = nw_i[k]
         w_s[k] = nw_s[k]

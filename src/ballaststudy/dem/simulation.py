@@ -419,7 +419,18 @@ class Simulation:
                 f"{P.STATUS_TEXT[status]} at step {self.step} (t = {self.time:.6g} s): "
                 f"ball {i} (stone {int(b.stone[i])}, clump {int(b.clump[i])}), value {v:.6g}; "
                 f"pos {b.pos[i].tolist()}, vel {b.vel[i].tolist()}, domain {self.domain}, "
-                f"vmax {self.prm[P.VMAX]:g}")
+                f"vmax {self.prm[P.VMAX]:g}; all offending balls: {self._offenders()}")
+
+    def _offenders(self, limit=20):
+        b, p = self.balls, self.prm
+        live = b.alive == 1
+        bad = ~np.isfinite(b.pos).all(1) | ~np.isfinite(b.vel).all(1) | ~np.isfinite(b.omega)
+        bad |= (b.vel ** 2).sum(1) > p[P.VMAX] ** 2
+        bad |= (b.pos[:, 0] < p[P.XMIN]) | (b.pos[:, 0] > p[P.XMAX])
+        bad |= (b.pos[:, 1] < p[P.YMIN]) | (b.pos[:, 1] > p[P.YMAX])
+        ids = np.nonzero(bad & live)[0]
+        more = f" ... ({len(ids)} in total)" if len(ids) > limit else ""
+        return ids[:limit].tolist().__repr__() + more
 
     # ------------------------------------------------------------------ checkpoint
     def save_checkpoint(self, path):

@@ -120,7 +120,7 @@ class Clumps(_Arrays):
 
 @dataclass
 class Pairs(_Arrays):
-    """Verlet list of ball-ball pairs (i < j, sorted by (i, j)) with contact history:
+    """Verlet list of ball-ball pairs (i < j, grouped by ascending i) with contact history:
     ``hist`` = shear force (PFC law, [0] along the tangent) or shear displacement vector
     (hooke law); ``bond`` = flat-joint index of the pair or -1; ``fn``/``fs`` = last
     normal/shear force (for output and energies)."""
