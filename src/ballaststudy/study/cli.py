@@ -1,0 +1,116 @@
+"""`ballaststudy study ...`: aggregate, iri, optimise. `register(subparsers)` adds the stage to
+the main parser (ballaststudy.cli). Bad input raises ConfigError (file, key, allowed range),
+which the main command prints as one line with exit code 2; no partial outputs are left."""
+
+from pathlib import Path
+
+from ..config import ConfigError
+from ..provenance import Recorder
+from .aggregate import BEHAVIOURS, _open, aggregate, identify_metrics
+
+
+def _forms_name(path):
+    ds = _open(path)
+    return str(ds.attrs.get("database", Path(path).name.removesuffix(".nc")))
+
+
+def _groups(items):
+    out = {}
+    for item in items or ():
+        db, sep, group = item.partition("=")
+        if not sep or not db or not group:
+            raise ConfigError("command line", "--group", f"{item!r} is not DATABASE=GROUP")
+        out[db] = group
+    return out
+
+
+def _study_aggregate(args):
+    metrics = {}
+    for p in args.metrics:
+        key = identify_metrics(p)
+        if key in metrics:
+            raise ConfigError(p, None, f"database {key[0]} case {key[1]} also given by {metrics[key]}")
+        metrics[key] = Path(p)
+    forms = {}
+    for p in args.forms:
+        name = _forms_name(p)
+        if name in forms:
+            raise ConfigError(p, "database", f"{name} also given by {forms[name]}")
+        forms[name] = Path(p)
+    print(f"wrote {aggregate(metrics, forms, args.out, _groups(args.group))}")
+
+
+def _load_study(path):
+    ds = _open(path)
+    for name in BEHAVIOURS:
+        if name not in ds.data_vars:
+            raise ConfigError(path, name, "variable missing; not a study.nc from `ballaststudy study aggregate`")
+    for dim in ("database", "case", "cycle"):
+        if dim not in ds.dims:
+            raise ConfigError(path, dim, "dimension missing; expected (database, case, cycle)")
+    return ds
+
+
+def _check_boot(args):
+    if args.resamples < 100:
+        raise ConfigError("command line", "--resamples", f"{args.resamples} is out of range; allowed: >= 100")
+    if getattr(args, "min_rho", 0.3) is not None and not 0 <= getattr(args, "min_rho", 0.3) <= 1:
+        raise ConfigError("command line", "--min-rho", f"{args.min_rho} is out of range; allowed: 0-1")
+
+
+def _write_with_provenance(step, args, params, write):
+    recorder = Recorder(step, inputs=[args.study], params=params, seed=args.seed)
+    paths = write()
+    recorder.finish()
+    for path in paths:
+        if path.suffix in (".csv", ".md"):
+            recorder.write_beside(path)
+        print(f"wrote {path}")
+
+
+def _study_iri(args):
+    _check_boot(args)
+    study = _load_study(args.study)
+    from .iri import write_iri
+    _write_with_provenance("study iri", args, {"resamples": args.resamples, "min_rho": args.min_rho},
+                           lambda: write_iri(study, args.out, args.resamples, args.seed, args.min_rho))
+
+
+def _study_optimise(args):
+    _check_boot(args)
+    study = _load_study(args.study)
+    from .report import write_report
+    _write_with_provenance("study optimise", args, {"resamples": args.resamples},
+                           lambda: write_report(study, args.out, args.resamples, args.seed, str(args.study)))
+
+
+def register(subparsers):
+    """Add the `study` stage (actions aggregate, iri, optimise) to `subparsers`."""
+    st = subparsers.add_parser("study", help="aggregate metrics to study.nc, IRI tables, optimisation (thesis ch. 5)")
+    ss = st.add_subparsers(dest="action", required=True)
+
+    a = ss.add_parser("aggregate", help="per-case metrics.nc + form databases -> study.nc")
+    a.add_argument("metrics", nargs="+", metavar="METRICS.nc",
+                   help="per (database, case): attributes 'database'/'case' or path .../<database>/<case>/metrics.nc")
+    a.add_argument("--forms", nargs="+", required=True, metavar="FORMS.nc",
+                   help="form databases (results/forms/<db>.nc)")
+    a.add_argument("--out", required=True, type=Path, help="output file, e.g. results/study.nc")
+    a.add_argument("--group", action="append", metavar="DATABASE=GROUP",
+                   help="override a database's group (default: forms attribute 'group', else G_<group>-<i>)")
+    a.set_defaults(func=_study_aggregate)
+
+    i = ss.add_parser("iri", help="IRI tables like thesis Table 5-2: CSV, Markdown, heatmap")
+    i.add_argument("study", type=Path, metavar="STUDY.nc")
+    i.add_argument("--out", required=True, type=Path, help="output folder")
+    i.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (>= 100)")
+    i.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    i.add_argument("--min-rho", type=float, default=0.3, help="smallest |Spearman rho| for a verdict other than none")
+    i.set_defaults(func=_study_iri)
+
+    o = ss.add_parser("optimise", help="ranking, Pareto set, recommendation, thesis findings, Figs. 5-1 ... 5-6")
+    o.add_argument("study", type=Path, metavar="STUDY.nc")
+    o.add_argument("--out", required=True, type=Path, help="output folder")
+    o.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (>= 100)")
+    o.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    o.set_defaults(func=_study_optimise)
+    return st

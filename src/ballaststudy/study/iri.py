@@ -1,0 +1,109 @@
+"""Interrelationship Index (IRI) tables (thesis 5.7, Table 5-2): for each of the 10 pairs of
+the five behaviours, the correlation across all (database, case) samples of the final values
+and of the change over the cyclic phase (last minus first run cycle), Pearson and Spearman
+with seeded bootstrap 95 % intervals (resampling the samples), and a verdict by
+`stats.VERDICT_RULE`."""
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from ..atomic import atomic_path
+from . import stats
+
+# thesis abbreviation -> study.nc variable
+IRI_BEHAVIOURS = {"BS": "settlement", "BR": "breakage_rate", "GP": "ghost_particles", "FPA": "fpa",
+                  "VR": "void_ratio"}
+KINDS = {"final": stats.final_value, "change": stats.change_value}
+COLUMNS = ["iri", "a", "b", "kind", "n", "pearson_r", "pearson_lo", "pearson_hi", "pearson_p",
+           "spearman_rho", "spearman_lo", "spearman_hi", "spearman_p", "verdict"]
+
+
+def case_samples(study, variable, kind):
+    """Flat array over (database, case) of `kind` ('final' or 'change') of one behaviour."""
+    return KINDS[kind](study[variable].values).ravel()
+
+
+def iri_table(study, n_boot=2000, seed=0, min_abs_rho=stats.MIN_ABS_RHO):
+    """DataFrame with one row per (pair, kind): 10 pairs x ('final', 'change')."""
+    rows = []
+    pairs = list(itertools.combinations(IRI_BEHAVIOURS, 2))
+    for kind in KINDS:
+        for k, (a, b) in enumerate(pairs):
+            c = stats.correlation(case_samples(study, IRI_BEHAVIOURS[a], kind),
+                                  case_samples(study, IRI_BEHAVIOURS[b], kind), n_boot=n_boot, seed=seed + k)
+            rows.append({"iri": f"IRI_{a}-{b}", "a": a, "b": b, "kind": kind, **c,
+                         "verdict": stats.verdict(c, min_abs=min_abs_rho)})
+    return pd.DataFrame(rows)[COLUMNS]
+
+
+def _fmt(v, digits=2):
+    return "n/a" if not np.isfinite(v) else f"{v:.{digits}f}"
+
+
+def iri_markdown(table, n_boot, seed, min_abs_rho=stats.MIN_ABS_RHO):
+    rule = stats.VERDICT_RULE.replace(str(stats.MIN_ABS_RHO), f"{min_abs_rho:g}")
+    lines = ["# Interrelationship Index (IRI) of the behaviours (thesis 5.7, Table 5-2)", "",
+             "Samples: every (database, case) with both values finite. *final*: value at the last run "
+             "cycle; *change*: last minus first run cycle.",
+             f"Intervals: percentile bootstrap 95 %, {n_boot} resamples of the samples, seed {seed}.",
+             f"Verdict rule: {rule}.", "",
+             "Behaviours: BS settlement, BR breakage rate, GP ghost particles, FPA force propagation "
+             "angle (mean), VR void ratio.", ""]
+    for kind in KINDS:
+        lines += [f"## {kind} values", "",
+                  "| IRI | n | Pearson r [95 % CI] | p | Spearman rho [95 % CI] | p | verdict |",
+                  "|---|---|---|---|---|---|---|"]
+        for _, r in table[table.kind == kind].iterrows():
+            lines.append(f"| {r.iri} | {r.n} | {_fmt(r.pearson_r)} [{_fmt(r.pearson_lo)}, {_fmt(r.pearson_hi)}] | "
+                         f"{_fmt(r.pearson_p, 3)} | {_fmt(r.spearman_rho)} [{_fmt(r.spearman_lo)}, "
+                         f"{_fmt(r.spearman_hi)}] | {_fmt(r.spearman_p, 3)} | {r.verdict} |")
+        lines.append("")
+    lines += ["![IRI heatmap](iri_heatmap.png)", ""]
+    return "\n".join(lines)
+
+
+_MARK = {"positive": "+", "negative": "-", "none": "0", "not decidable": "?"}
+
+
+def fig_heatmap(table):
+    """Spearman's rho as a 5x5 matrix per kind; the verdict (+, -, 0, ?) under each number."""
+    names = list(IRI_BEHAVIOURS)
+    fig = Figure(figsize=(10, 4.6))
+    FigureCanvasAgg(fig)
+    for p, kind in enumerate(KINDS):
+        ax = fig.add_subplot(1, 2, p + 1)
+        m = np.full((5, 5), np.nan)
+        marks = {}
+        for _, r in table[table.kind == kind].iterrows():
+            i, j = names.index(r.a), names.index(r.b)
+            m[i, j] = m[j, i] = r.spearman_rho
+            marks[(i, j)] = marks[(j, i)] = _MARK[r.verdict]
+        im = ax.imshow(np.ma.masked_invalid(m), cmap="RdBu_r", vmin=-1, vmax=1)
+        for (i, j), mk in marks.items():
+            ax.text(j, i, f"{_fmt(m[i, j])}\n{mk}", ha="center", va="center", fontsize=8)
+        ax.set_xticks(range(5), names)
+        ax.set_yticks(range(5), names)
+        ax.set_title(f"Spearman's rho, {kind} values")
+        fig.colorbar(im, ax=ax, shrink=0.8)
+    fig.suptitle("IRI: + positive, - negative, 0 none, ? not decidable")
+    fig.tight_layout()
+    return fig
+
+
+def write_iri(study, out_dir, n_boot=2000, seed=0, min_abs_rho=stats.MIN_ABS_RHO):
+    """Write iri.csv, iri.md and iri_heatmap.png into `out_dir` (atomically); return the paths."""
+    out = Path(out_dir)
+    table = iri_table(study, n_boot=n_boot, seed=seed, min_abs_rho=min_abs_rho)
+    paths = [out / "iri.csv", out / "iri.md", out / "iri_heatmap.png"]
+    with atomic_path(paths[0]) as tmp:
+        table.to_csv(tmp, index=False)
+    with atomic_path(paths[1]) as tmp:
+        tmp.write_text(iri_markdown(table, n_boot, seed, min_abs_rho))
+    with atomic_path(paths[2]) as tmp:
+        fig_heatmap(table).savefig(tmp, format="png", dpi=130)
+    return paths

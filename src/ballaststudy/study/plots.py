@@ -1,0 +1,86 @@
+"""Figures like thesis Figs. 5-1 ... 5-6: one figure per behaviour, one panel per database
+group, one curve per database = mean over its cases at each cycle, with a shaded band from
+the minimum to the maximum over the cases (cases that did not run a cycle are left out)."""
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from ..atomic import atomic_path
+from . import stats
+
+DPI = 130
+BAND = "min-max over cases"
+# file, variable, label, factor to the plotted unit
+FIGURES = [
+    ("fig_5-1_settlement.png", "settlement", "settlement (mm)", 1e3),
+    ("fig_5-2_breakage_rate.png", "breakage_rate", "breakage rate (%)", 100.0),
+    ("fig_5-4_ghost_particles.png", "ghost_particles", "ghost particles (-)", 1.0),
+    ("fig_5-5_force_propagation_angle.png", "fpa", "force propagation angle (deg)", 1.0),
+    ("fig_5-6_void_ratio.png", "void_ratio", "void ratio (%)", 100.0),
+]
+
+
+def _save(fig, path):
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI)
+    return Path(path)
+
+
+def _groups(study):
+    groups = list(dict.fromkeys(study.group.values.tolist()))
+    return [(g, [str(d) for d, gg in zip(study.database.values, study.group.values) if gg == g]) for g in groups]
+
+
+def _case_stats(values):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanmean(values, axis=0), np.nanmin(values, axis=0), np.nanmax(values, axis=0)
+
+
+def fig_behaviour(study, variable, label, factor):
+    groups = _groups(study)
+    fig = Figure(figsize=(4.6 * len(groups), 3.8))
+    FigureCanvasAgg(fig)
+    cycles = study.cycle.values
+    for p, (group, dbs) in enumerate(groups):
+        ax = fig.add_subplot(1, len(groups), p + 1)
+        for db in dbs:
+            mean, lo, hi = _case_stats(study[variable].sel(database=db).values * factor)
+            line, = ax.plot(cycles, mean, lw=1.3, label=db)
+            ax.fill_between(cycles, lo, hi, color=line.get_color(), alpha=0.18, lw=0)
+        ax.set(xlabel="loading cycle", ylabel=label, title=f"database group {group}")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"{label}: mean over cases, band {BAND}", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig_final_breakage(study):
+    """Like Fig. 5-3 (there: number of breakages): final breakage rate per database, mean
+    over cases, error bar min-max over cases (the rig reports rates, not counts)."""
+    final = stats.final_value(study["breakage_rate"].values) * 100.0
+    mean, lo, hi = _case_stats(final.T)
+    fig = Figure(figsize=(max(5.0, 0.6 * len(mean) + 2), 3.8))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    x = np.arange(len(mean))
+    ax.bar(x, mean, color="#6baed6")
+    ax.errorbar(x, mean, yerr=[mean - lo, hi - mean], fmt="none", color="k", lw=1)
+    ax.set_xticks(x, [str(d) for d in study.database.values], rotation=45, ha="right")
+    ax.set(ylabel="breakage rate after loading (%)", title=f"final breakage rate: mean, bar {BAND}")
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def write_figures(study, out_dir):
+    """Write Figs. 5-1 ... 5-6 into `out_dir` (atomically); return the paths."""
+    out = Path(out_dir)
+    paths = [_save(fig_behaviour(study, v, label, f), out / name) for name, v, label, f in FIGURES]
+    paths.insert(2, _save(fig_final_breakage(study), out / "fig_5-3_final_breakage_rate.png"))
+    return paths

@@ -1,0 +1,124 @@
+"""Optimisation report (thesis 5.8) as Markdown with its tables (CSV) and figures (PNG)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from ..atomic import atomic_path
+from . import optimise, plots
+
+
+def fig_fines_threshold(ctx):
+    """Final settlement (mean over cases, bar = se) vs percent passing 22.4 mm with the
+    two-segment fit (free jump) and the breakpoint's bootstrap interval (shaded)."""
+    s = ctx["summary"]
+    fig = Figure(figsize=(6.2, 4.2))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    for g, rows in s.groupby("group", sort=False):
+        ax.errorbar(rows.percent_passing_22_4mm, rows.settlement_final * 1e3, yerr=rows.settlement_final_se * 1e3,
+                    fmt="o", ms=5, capsize=2, label=f"group {g}")
+    ft = ctx["fines"]
+    if ft is not None:
+        f = ft["fit"]
+        for lo_x, hi_x, a, b, label in (
+                (ft["x"].min(), f["gap_lo"], f["left_a"], f["left_b"],
+                 f"two-segment fit, breakpoint {f['breakpoint']:.3g} %"),
+                (f["gap_hi"], ft["x"].max(), f["right_a"], f["right_b"], None)):
+            xs = np.linspace(lo_x, hi_x, 100)
+            ax.plot(xs, 1e3 * (a + b * xs), "k-", lw=1, label=label)
+        lo, hi = ft["breakpoint_ci"]
+        if np.isfinite(lo) and hi > lo:
+            ax.axvspan(lo, hi, color="0.5", alpha=0.2, label="breakpoint 95 % interval")
+        elif np.isfinite(lo):
+            ax.axvline(lo, color="0.4", ls="--", lw=1, label="breakpoint 95 % interval (one point)")
+    ax.axvspan(*optimise.THRESHOLD_RANGE, color="tab:red", alpha=0.15, label="thesis: 16-17.5 %")
+    ax.set(xlabel="percent passing 22.4 mm (%)", ylabel="final settlement (mm)",
+           title="Settlement regime vs fines (thesis 5.2)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def _cell(v):
+    if isinstance(v, (float, np.floating)):
+        return "n/a" if not np.isfinite(v) else f"{v:.4g}"
+    return str(v)
+
+
+def _md_table(df, columns):
+    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    for name, row in df.iterrows():
+        lines.append("| " + " | ".join(_cell(name if c == "database" else row[c]) for c in columns) + " |")
+    return lines
+
+
+def report_markdown(ctx, findings, pareto, recommend, figures, study_path=None, extent=""):
+    ranking = ctx["ranking"]
+    cols = ["rank", "database", "group", "tier_path", "settlement_final", "breakage_rate_final", "ghost_level",
+            "ghost_variability", "fpa_level", "fpa_variability", "void_ratio_level", "void_ratio_variability"]
+    lines = ["# The optimised ballast aggregate (thesis 5.8)", ""]
+    if study_path:
+        lines += [f"Data: `{study_path}`; bootstrap {ctx['n_boot']} resamples, seed {ctx['seed']}.", ""]
+    if extent:
+        lines += [extent, ""]
+    lines += ["## Ranking", "", f"Rule: {optimise.RANKING_RULE}.", "",
+              "Units: settlement m, breakage rate 1 (fraction), ghost particles count, FPA deg, void ratio 1. "
+              "`tier_path`: tier (1 = best) at each criterion in order.", ""]
+    lines += _md_table(ranking, cols) + [""]
+    lines += ["## Pareto set", "", f"Rule: {optimise.PARETO_RULE}.", "",
+              ", ".join(pareto) if pareto else "(empty)", "",
+              "## Recommended databases", "", f"Rule: {optimise.RECOMMEND_RULE}.", ""]
+    lines += [f"- group {g}: **{d}** (rank {int(ranking.loc[d, 'rank'])}"
+              f"{', in the Pareto set' if d in pareto else ', not in the Pareto set'})" for g, d in recommend.items()]
+    lines += ["", "## The thesis' findings against our numbers", "",
+              "| finding | claim | mark | numbers |", "|---|---|---|---|"]
+    lines += [f"| {f['finding']} | {f['claim']} | **{f['mark']}** | {f['numbers']} |" for f in findings]
+    lines += ["", "Rules:", ""] + [f"- `{f['finding']}`: {f['rule']}." for f in findings]
+    lines += ["", "## Figures", "", f"Curves: mean over cases; bands: {plots.BAND}.", ""]
+    lines += [f"![{p.stem}]({p.name})" for p in figures] + [""]
+    return "\n".join(lines)
+
+
+def _extent(study):
+    run = study["cycles_run"].values if "cycles_run" in study else None
+    cases = (run > 0).sum(axis=1) if run is not None else np.full(study.sizes["database"], study.sizes["case"])
+    text = (f"{study.sizes['database']} databases, {int(cases.min())}-{int(cases.max())} cases each, "
+            f"up to {study.sizes['cycle']} cycles")
+    if run is not None and (run > 0).any():
+        text += f" (cases ran {int(run[run > 0].min())}-{int(run.max())} cycles)"
+    return text + "."
+
+
+def write_report(study, out_dir, n_boot=2000, seed=0, study_path=None):
+    """Write report.md, ranking.csv, findings.csv/json, Figs. 5-1 ... 5-6 and the fines-threshold
+    figure into `out_dir` (atomically); return the written paths."""
+    out = Path(out_dir)
+    ctx = optimise.context(study, n_boot, seed)
+    findings = optimise.check_findings(study, n_boot, seed, ctx=ctx)
+    pareto = optimise.pareto_set(ctx["summary"])
+    recommend = optimise.recommended(ctx["ranking"])
+    figures = plots.write_figures(study, out)
+    fig = out / "fig_fines_threshold.png"
+    with atomic_path(fig) as tmp:
+        fig_fines_threshold(ctx).savefig(tmp, format="png", dpi=plots.DPI)
+    figures.append(fig)
+    ranking = ctx["ranking"].copy()
+    ranking["pareto"] = [d in pareto for d in ranking.index]
+    ranking["recommended"] = [recommend.get(ranking.loc[d, "group"]) == d for d in ranking.index]
+    written = []
+    for name, write in (
+            ("ranking.csv", lambda p: ranking.to_csv(p)),
+            ("findings.csv", lambda p: pd.DataFrame(findings).to_csv(p, index=False)),
+            ("findings.json", lambda p: p.write_text(json.dumps(findings, indent=1))),
+            ("report.md", lambda p: p.write_text(report_markdown(ctx, findings, pareto, recommend, figures,
+                                                                 study_path, _extent(study))))):
+        with atomic_path(out / name) as tmp:
+            write(tmp)
+        written.append(out / name)
+    return written + figures

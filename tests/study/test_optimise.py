@@ -1,0 +1,131 @@
+"""Ranking, Pareto set, the fines-threshold fit and the thesis' findings (holds / does not
+hold / not decidable) on planted data; the optimisation report and the CLI."""
+
+import argparse
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+
+from ballaststudy.study import aggregate, check_findings, pareto_set, rank_databases, write_report
+from ballaststudy.study import optimise, stats
+from ballaststudy.study.cli import register
+
+MARKS = {"holds", "does not hold", "not decidable"}
+FINDINGS = ["jump_G_1-1", "jump_G_2-5", "fines_threshold", "gp_with_settlement", "vr_with_mean_size",
+            "vr_with_fines", "fpa_stability", "breakage_low_no_trend", "optimum"]
+
+
+def _marks(study, **kw):
+    return {f["finding"]: f["mark"] for f in check_findings(study, n_boot=500, **kw)}
+
+
+def test_pareto_on_hand_table():
+    t = pd.DataFrame({"s": [1.0, 2.0, 2.0, 1.0, 0.5], "br": [1.0, 0.5, 2.0, 1.0, 3.0], "fpa": [50, 50, 60, 50, 40]},
+                     index=["A", "B", "C", "D", "E"])
+    assert pareto_set(t, {"s": "min", "br": "min"}) == ["A", "B", "D", "E"]          # C dominated by A
+    assert pareto_set(t, {"s": "min", "br": "min", "fpa": "max"}) == ["A", "B", "C", "D", "E"]
+    assert pareto_set(t.drop(index="E"), {"s": "min", "fpa": "min"}) == ["A", "D"]
+    t.loc["A", "s"] = np.nan                                                           # not compared
+    assert "A" not in pareto_set(t, {"s": "min", "br": "min"})
+
+
+def test_ranking_settlement_first_with_statistical_ties():
+    crit = [c[0] for c in optimise.CRITERIA][:2]
+    t = pd.DataFrame({"group": ["1", "1", "1"], "settlement_final": [1.0, 1.1, 2.0],
+                      "settlement_final_se": [0.1, 0.1, 0.1], "breakage_rate_final": [0.5, 0.1, 0.0],
+                      "breakage_rate_final_se": [0.01, 0.01, 0.01]}, index=["A", "B", "C"])
+    r = rank_databases(t, crit)
+    # A and B tie on settlement (0.1 < 2 sqrt(0.1^2 + 0.1^2)); B has less breakage; C, the best
+    # in breakage, is last because settlement comes first
+    assert list(r.index) == ["B", "A", "C"]
+    assert r.tier_path.tolist() == ["1.1", "1.2", "2"]
+    t.loc[:, "settlement_final_se"] = 0.0                                              # no ties any more
+    assert list(rank_databases(t, crit).index) == ["A", "B", "C"]
+
+
+@pytest.mark.parametrize("planted_at, mark", [(17.0, "holds"), (8.0, "does not hold")])
+def test_fines_breakpoint_recovered(tmp_path, synth, planted_at, mark):
+    fines = [2, 5, 8.5, 11, 14, 16, 18, 20, 25, 30]
+    dbs = {f"G_2-{i + 1}": ([100, 97, 90, 80, 55, x, x / 2, 0], 30) for i, x in enumerate(fines)}
+    dbs["G_1-1"] = dbs.pop("G_2-1")
+    hinge = lambda x: 2e-3 + 1e-5 * x + (6e-3 + 3e-4 * (x - planted_at) if x > planted_at else 0.0)  # noqa: E731
+    metrics, forms = synth.planted(tmp_path, np.random.default_rng(2), databases=dbs, n_cases=4, n_cycles=5,
+                                   settlement_of_fines=hinge)
+    study = xr.open_dataset(aggregate(metrics, forms, tmp_path / "study.nc")).load()
+    ctx = optimise.context(study, n_boot=500, seed=1)
+    ft = ctx["fines"]
+    bp, (lo, hi) = ft["fit"]["breakpoint"], ft["breakpoint_ci"]
+    assert lo <= bp <= hi
+    assert abs(bp - planted_at) <= 1.5, (bp, lo, hi)
+    assert ft["excess_ci"][0] > 0
+    assert _marks(study)["fines_threshold"] == mark
+
+
+def test_two_segment_fit_exact():
+    x = np.array([1.0, 2, 3, 4, 10, 11, 12])
+    y = np.where(x < 5, 1 + 0.5 * x, 20 + 2 * x)
+    f = stats.two_segment_fit(x, y)
+    assert f["breakpoint"] == pytest.approx(7.0) and (f["gap_lo"], f["gap_hi"]) == (4.0, 10.0)
+    assert (f["left_a"], f["left_b"], f["right_a"], f["right_b"]) == pytest.approx((1, 0.5, 20, 2))
+    assert stats.two_segment_fit(x[:3], y[:3]) is None
+
+
+def test_thesis_findings_on_planted_data(thesis_study):
+    _, study = thesis_study
+    findings = check_findings(study, n_boot=500)
+    assert [f["finding"] for f in findings] == FINDINGS
+    for f in findings:
+        assert f["mark"] in MARKS and f["rule"] and f["numbers"]
+    marks = {f["finding"]: f["mark"] for f in findings}
+    for key in ("jump_G_1-1", "jump_G_2-5", "fines_threshold", "gp_with_settlement", "vr_with_fines",
+                "fpa_stability", "breakage_low_no_trend"):
+        assert marks[key] == "holds", (key, [f for f in findings if f["finding"] == key])
+
+
+def test_findings_not_decidable_when_databases_absent(thesis_study):
+    _, study = thesis_study
+    marks = _marks(study.drop_sel(database=["G_1-1", "G_2-5"]))
+    assert set(marks.values()) <= MARKS and list(marks) == FINDINGS
+    for key in ("jump_G_1-1", "jump_G_2-5", "fines_threshold", "fpa_stability"):
+        assert marks[key] == "not decidable", key
+    assert _marks(study.drop_sel(database=["G_1-5"]))["optimum"] == "not decidable"
+    one_case = _marks(study.isel(case=[0]))
+    assert one_case["jump_G_1-1"] == "not decidable"           # no spread over cases to judge
+    assert one_case["gp_with_settlement"] in MARKS
+
+
+def test_findings_do_not_hold_when_planted_against(tmp_path, synth):
+    dbs = {k: v for k, v in synth.THESIS.items() if k.startswith("G_1")}
+    metrics, forms = synth.planted(tmp_path, np.random.default_rng(4), databases=dbs, n_cases=3, n_cycles=5,
+                                   jump=False)
+    study = xr.open_dataset(aggregate(metrics, forms, tmp_path / "study.nc")).load()
+    assert _marks(study)["jump_G_1-1"] == "does not hold"      # same settlement everywhere
+
+
+def test_report_and_cli(thesis_study, tmp_path, capsys):
+    path, study = thesis_study
+    p = argparse.ArgumentParser()
+    register(p.add_subparsers(dest="stage"))
+    args = p.parse_args(["study", "optimise", str(path), "--out", str(tmp_path / "opt"), "--resamples", "200"])
+    args.func(args)
+    out = tmp_path / "opt"
+    md = (out / "report.md").read_text()
+    for name in ("fig_5-1_settlement.png", "fig_5-2_breakage_rate.png", "fig_5-3_final_breakage_rate.png",
+                 "fig_5-4_ghost_particles.png", "fig_5-5_force_propagation_angle.png", "fig_5-6_void_ratio.png",
+                 "fig_fines_threshold.png"):
+        assert (out / name).stat().st_size > 1000 and f"]({name})" in md
+    for f in FINDINGS:
+        assert f"| {f} |" in md
+    assert "## Pareto set" in md and "## Recommended databases" in md
+    ranking = pd.read_csv(out / "ranking.csv", index_col=0)
+    assert ranking["rank"].tolist() == list(range(1, 16))
+    assert ranking.recommended.sum() == 3 and ranking.pareto.any()
+    assert len(json.loads((out / "findings.json").read_text())) == len(FINDINGS)
+    assert (out / "report.md.prov.json").is_file()
+    assert not list(out.glob(".*tmp*"))
+    args = p.parse_args(["study", "iri", str(path), "--out", str(tmp_path / "iri"), "--resamples", "200"])
+    args.func(args)
+    assert (tmp_path / "iri" / "iri.csv.prov.json").is_file()
