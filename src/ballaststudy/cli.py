@@ -14,6 +14,7 @@ from .forms.evaluate import MeshError, evaluate_stl
 from .forms.generator import GenerationError
 from .forms.objective import ObjectiveError
 from .forms.validate import SUMMARY_COLUMNS, validation_row
+from .study.cli import register as register_study
 
 
 def _forms_generate(args):
@@ -135,6 +136,8 @@ def build_parser():
     vf = ps.add_parser("verify", help="re-hash every recorded input and output; exit 1 if any changed")
     vf.add_argument("--results", default="results")
     vf.set_defaults(func=_provenance_verify)
+
+    register_study(sub)
 
     c = sub.add_parser("config", help="configuration")
     cs = c.add_subparsers(dest="action", required=True)
