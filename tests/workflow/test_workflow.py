@@ -1,6 +1,7 @@
 """The Snakemake workflow on a tiny study: runs, reruns only what a config edit touches,
 does nothing when nothing changed, and the SLURM profile passes a dry run."""
 
+import contextlib
 import re
 import shutil
 import subprocess
@@ -51,43 +52,37 @@ def test_rerun_with_nothing_changed_does_nothing(study):
     assert "Nothing to be done" in _snakemake(study, "-n")
 
 
-def test_editing_one_database_reruns_only_it(study):
-    path = study / "config" / "databases.yaml"
+@contextlib.contextmanager
+def _edited(path, change):
+    """The YAML file at `path` with `change(data)` applied, restored afterwards."""
     original = path.read_text()
-    dbs = yaml.safe_load(original)
-    dbs["databases"]["box_test"]["shape_index"] = 20
-    path.write_text(yaml.safe_dump(dbs))
+    data = yaml.safe_load(original)
+    change(data)
+    path.write_text(yaml.safe_dump(data))
     try:
-        jobs = _jobs(_snakemake(study, "-n"))
+        yield
     finally:
         path.write_text(original)
+
+
+def test_editing_one_database_reruns_only_it(study):
+    with _edited(study / "config" / "databases.yaml",
+                 lambda d: d["databases"]["box_test"].update(shape_index=20)):
+        jobs = _jobs(_snakemake(study, "-n"))
     assert jobs.get("forms_generate") == 1, jobs
     assert jobs.get("forms_report") == 1, jobs
 
 
 def test_editing_form_settings_reruns_every_database(study):
-    path = study / "config" / "config.yaml"
-    original = path.read_text()
-    cfg = yaml.safe_load(original)
-    cfg["forms"]["n_vertices"] = 24
-    path.write_text(yaml.safe_dump(cfg))
-    try:
+    with _edited(study / "config" / "config.yaml", lambda c: c["forms"].update(n_vertices=24)):
         jobs = _jobs(_snakemake(study, "-n"))
-    finally:
-        path.write_text(original)
     assert jobs.get("forms_generate") == 2, jobs
 
 
 def test_bad_config_is_rejected_before_any_job(study):
-    path = study / "config" / "databases.yaml"
-    original = path.read_text()
-    dbs = yaml.safe_load(original)
-    dbs["databases"]["G_1-5"]["mass_kg"] = -1
-    path.write_text(yaml.safe_dump(dbs))
-    try:
+    with _edited(study / "config" / "databases.yaml",
+                 lambda d: d["databases"]["G_1-5"].update(mass_kg=-1)):
         out = subprocess.run(["snakemake", "--cores", "1", "-n"], cwd=study, capture_output=True, text=True)
-    finally:
-        path.write_text(original)
     assert out.returncode != 0
     assert "databases.G_1-5.mass_kg" in out.stdout + out.stderr
 
