@@ -1,0 +1,300 @@
+"""Assembling the BPMs in the box (thesis 4.2.2, Fig. 4-8 a-d).
+
+a. random stones from the library (seeded per case), rebuilt on a grid of cells in a tall,
+   wide container so that no two stones interpenetrate;
+b. free fall under 1000 m/s^2 with bonds strengthened, stopped when the highest stone
+   reverses its vertical velocity;
+c. balls above the ballast depth deleted, the pressing plate created as a held clump at
+   that height, the stones given centripetal velocities so they pack against the plate;
+d. balls outside the test's width deleted, side walls moved to the test's width (bottom
+   already in 20 segments there), a loading ball on the plate, relaxation steps.
+
+Each stage is a few "fix"-like operations between engine runs; the engine does the rest.
+"""
+import numpy as np
+
+from ..dem import ContactMaterial, Simulation
+from ..dem.params import GY, THICK
+from .box import BoxRig, RigLayout
+
+STEEL = 2        # material id of the plate, loading ball and walls (same LC law, Table 4.2)
+
+
+def choose_stones(lib, params, rng):
+    """Library indices drawn with replacement until the ball area reaches
+    fill_area_ratio * width * depth."""
+    target = params.fill_area_ratio * params.width_m * params.depth_m
+    picks, area = [], 0.0
+    while area < target:
+        k = int(rng.integers(len(lib)))
+        picks.append(k)
+        area += lib.stone(k).area
+        if len(picks) > 100000:
+            raise ValueError("library stones are too small for the container")
+    return picks
+
+
+def build_tall(lib, params, seed, contact_damping=None):
+    """Stage a: stones on a grid in the tall container; bonds installed. Returns a BoxRig."""
+    p = params
+    rng = np.random.default_rng(seed)
+    picks = choose_stones(lib, p, rng)
+    stones = [lib.stone(k) for k in picks]
+    wt = p.tall_width_factor * p.width_m
+    # shelf packing: stones left to right in rows, each in a disk of its own extent times
+    # placement_gap_factor; every row starts at a random offset so no columns form
+    centres, x, y, row_h = [], None, 0.0, 0.0
+    for s in stones:
+        e = p.placement_gap_factor * s.extent
+        if x is None or x + 2 * e > 0.5 * wt:
+            y += row_h
+            x = -0.5 * wt + rng.uniform(0.0, 0.5) * e
+            row_h = 0.0
+        centres.append((x + e, y + e))
+        x += 2 * e
+        row_h = max(row_h, 2 * e)
+    h_tall = y + row_h + p.height_m
+    margin = max(0.5 * wt, 0.1)
+    sim = Simulation(thickness=lib.thickness, gravity=(0.0, -p.drop_gravity_m_s2),
+                     damping=p.drop_damping, dt_safety=p.dt_safety,
+                     domain=(-0.5 * wt - margin, -margin, 0.5 * wt + margin, h_tall + margin))
+    beta = p.contact_damping_ratio if contact_damping is None else contact_damping
+    lc = lib.materials[0]["lc"]
+    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=lc.mu, beta_n=beta,
+                                             beta_s=beta))
+    # the loading ball sits loosely on the plate (not rigidly coupled, thesis 4.1): a softer,
+    # damped steel-steel contact so the velocity-controlled ball does not hammer the plate
+    sim.set_contact_material(ContactMaterial(E=p.loading_contact_E_Pa, kappa=lc.kappa, mu=lc.mu,
+                                             beta_n=p.loading_contact_damping_ratio,
+                                             beta_s=p.loading_contact_damping_ratio),
+                             STEEL, STEEL)
+    lay = RigLayout(seed=int(seed), database=lib.database, library=lib.path,
+                    stone_library_index=[int(k) for k in picks],
+                    stone_material=[int(s.material) for s in stones])
+    # walls: bottom (extension | 20 segments over the test's width | extension), sides
+    w2, t2 = 0.5 * p.width_m, 0.5 * wt
+    lay.bottom_ext = sim.add_wall([(-t2, 0.0), (-w2, 0.0)], material_id=STEEL).tolist()
+    lay.bottom = sim.add_wall([(-w2, 0.0), (w2, 0.0)], segments=p.bottom_segments,
+                              material_id=STEEL).tolist()
+    lay.bottom_ext += sim.add_wall([(w2, 0.0), (t2, 0.0)], material_id=STEEL).tolist()
+    lay.left = sim.add_wall([(-t2, h_tall), (-t2, p.height_m), (-t2, 0.0)],
+                            material_id=STEEL).tolist()
+    lay.right = sim.add_wall([(t2, 0.0), (t2, p.height_m), (t2, h_tall)],
+                             material_id=STEEL).tolist()
+    lay.left_low, lay.right_low = lay.left[1], lay.right[0]
+    # stones: one per cell, random rotation, random shift within the cell's slack
+    for k, s in enumerate(stones):
+        cx, cy = centres[k]
+        a = rng.uniform(0, 2 * np.pi)
+        ca, sa = np.cos(a), np.sin(a)
+        x = cx + ca * s.x - sa * s.y
+        y = cy + sa * s.x + ca * s.y
+        rho = lib.materials[s.material]["density"]
+        sim.add_balls(x, y, s.r, rho, stone_id=k, material_id=s.material)
+        lay.bonds_library += len(s.bond_i)
+    lay.n_stone_balls = len(sim.balls)
+    fj = {m: lib.materials[m]["fj"] for m in (0, 1)}
+    lay.bonds_installed = int(sim.install_flat_joints(fj))
+    return BoxRig(sim, lay, p)
+
+
+def ramp_gravity(rig, g_from, g_to, steps, progress=None):
+    """Change gravity geometrically in 20 stages over ``steps`` (damped): an abrupt drop
+    from 1000 m/s^2 would release the pile's elastic energy and throw the stones up."""
+    sim = rig.sim
+    n = max(1, steps // 20)
+    for g in np.geomspace(g_from, g_to, 20):
+        sim.set_gravity((0.0, -float(g)))
+        sim.run(n)
+        if progress is not None:
+            progress(n)
+    return 20 * n
+
+
+def _stone_means(rig, values):
+    """Per-stone mean of a per-ball quantity over live stone balls."""
+    b = rig.sim.balls
+    ids = rig.stone_balls()
+    st = b.stone[ids]
+    n = np.bincount(st, minlength=len(rig.layout.stone_library_index))
+    s = np.bincount(st, weights=values[ids], minlength=len(n))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return s / n, n
+
+
+def drop(rig, progress=None):
+    """Stage b: free fall under drop_gravity with bonds strengthened until the highest
+    stone's mean vertical velocity turns upward (or stops). Returns the steps run."""
+    p, sim = rig.params, rig.sim
+    sim.scale_bond_strength(p.drop_bond_factor)
+    state = {"fell": False, "steps": 0}
+
+    def watch(s):
+        b = s.balls
+        ymean, n = _stone_means(rig, b.pos[:, 1])
+        vmean, _ = _stone_means(rig, b.vel[:, 1])
+        top = int(np.nanargmax(np.where(n > 0, ymean, -np.inf)))
+        v = vmean[top]
+        state["steps"] += p.drop_check_every
+        if progress is not None:
+            progress(p.drop_check_every)
+        if v < -1e-3:
+            state["fell"] = True
+        return state["fell"] and v >= 0.0
+
+    sim.run(p.drop_max_steps, callback=watch, every=p.drop_check_every)
+    return state["steps"]
+
+
+def tamp(rig, progress=None):
+    """Stage c: tamping-like compaction and the plate. Every stone gets a centripetal
+    velocity towards the axis x = 0 (rigidly, so bonds are not torn), ``tamping_pulses``
+    times, under ``tamping_gravity``; then balls reaching above the ballast depth are
+    deleted and the pressing plate is created as a held clump at the depth.
+    (The thesis deletes before tamping against the held plate; compacting first makes the
+    remaining layer as deep as the test's 18 cm instead of settling below it.)"""
+    p, sim, lay = rig.params, rig.sim, rig.layout
+    done = ramp_gravity(rig, p.drop_gravity_m_s2, p.tamping_gravity_m_s2, p.gravity_ramp_steps,
+                        progress)
+    pulses = max(1, p.tamping_pulses)
+    per = max(1, p.tamping_steps // pulses)
+    for _ in range(pulses):
+        ids = rig.stone_balls()
+        xm, _ = _stone_means(rig, sim.balls.pos[:, 0])
+        v = -p.tamping_velocity_m_s * np.clip(xm / (0.5 * p.width_m * p.tall_width_factor), -1, 1)
+        st = sim.balls.stone[ids]
+        vel = sim.balls.vel[ids].copy()
+        vel[:, 0] = v[st]
+        sim.set_ball_velocity(ids, vel=vel)
+        sim.run(per)
+        if progress is not None:
+            progress(per)
+    b = sim.balls
+    ids = rig.stone_balls()
+    sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.depth_m])
+    # plate: a row of overlapping pebbles (radius = half the thickness, spacing = radius)
+    rp = 0.5 * p.plate_thickness_m
+    n = max(2, int(round((p.plate_width_m - 2 * rp) / rp)) + 1)
+    px = np.linspace(-0.5 * p.plate_width_m + rp, 0.5 * p.plate_width_m - rp, n)
+    py = np.full(n, p.depth_m + rp)
+    # mass/inertia of the solid rectangle (the pebble sums would count overlaps twice)
+    m = p.plate_density_kg_m3 * p.plate_width_m * p.plate_thickness_m * sim.prm[THICK]
+    inertia = m * (p.plate_width_m ** 2 + p.plate_thickness_m ** 2) / 12.0
+    n0 = len(sim.balls)
+    lay.plate = int(sim.add_clump(px, py, np.full(n, rp), p.plate_density_kg_m3, held=True,
+                                  material_id=STEEL, mass=m, inertia=inertia))
+    lay.plate_balls = list(range(n0, len(sim.balls)))
+    sim.set_clump_velocity(lay.plate, vel=(0.0, 0.0), omega=0.0, held=True)
+    done += ramp_gravity(rig, p.tamping_gravity_m_s2, p.gravity_m_s2, p.gravity_ramp_steps,
+                         progress)
+    return done + pulses * per
+
+
+def move_side_walls(rig, progress=None):
+    """Stage d (first half): delete balls outside the test's width, then move the side
+    walls kinematically to x = -/+ width/2 (nothing is in their way any more)."""
+    p, sim, lay = rig.params, rig.sim, rig.layout
+    b = sim.balls
+    ids = rig.stone_balls()
+    w2 = 0.5 * p.width_m
+    out = (b.pos[ids, 0] - b.rad[ids] < -w2) | (b.pos[ids, 0] + b.rad[ids] > w2)
+    sim.delete_balls(ids[out])
+    steps = 0
+    for _ in range(200):
+        xl = sim.walls.seg[lay.left[0], 0]
+        xr = sim.walls.seg[lay.right[0], 0]
+        gap = max(-w2 - xl, xr - w2)
+        if gap < 1e-9:
+            break
+        dt = sim.dt if sim.dt > 0 else 1e-6
+        n = max(1, min(1000, int(np.ceil(gap / (p.wall_speed_m_s * dt)))))
+        sim.set_wall_velocity(lay.left, vel=((-w2 - xl) / (n * dt), 0.0))
+        sim.set_wall_velocity(lay.right, vel=((w2 - xr) / (n * dt), 0.0))
+        sim.run(n)
+        steps += n
+        if progress is not None:
+            progress(n)
+    sim.set_wall_velocity(lay.left, vel=(0.0, 0.0))
+    sim.set_wall_velocity(lay.right, vel=(0.0, 0.0))
+    return steps
+
+
+def settle_plate(rig, progress=None):
+    """Stage d: lower the held plate onto the stones (the tamped surface may lie below the
+    cut at the ballast depth): fast to within ``plate_approach_gap_m`` of the highest
+    stone ball under it (geometric gap), then at ``plate_settle_velocity_m_s`` until the
+    stones carry its weight. Returns the steps run."""
+    p, sim, lay = rig.params, rig.sim, rig.layout
+    c = lay.plate
+    b = sim.balls
+    ids = rig.stone_balls()
+    m = float(sim.clumps.mass[c])
+    steps = 0
+    for _ in range(10000):
+        pb = np.asarray(lay.plate_balls)
+        bottom = (b.pos[pb, 1] - b.rad[pb]).min()
+        under = np.abs(b.pos[ids, 0]) < 0.5 * p.plate_width_m + b.rad[ids]
+        top = (b.pos[ids[under], 1] + b.rad[ids[under]]).max() if under.any() else 0.0
+        gap = bottom - top
+        f, _ = sim.clump_force(c)
+        carried = f[1] - m * sim.prm[GY]
+        if carried >= m * p.gravity_m_s2:
+            break
+        dt = sim.dt if sim.dt > 0 else 1e-6
+        if gap > p.plate_approach_gap_m:
+            n = max(1, min(2000, int((gap - 0.5 * p.plate_approach_gap_m) / (p.wall_speed_m_s * dt))))
+            v = (gap - 0.5 * p.plate_approach_gap_m) / (n * dt)
+        else:
+            n, v = p.control_every, p.plate_settle_velocity_m_s
+        sim.set_clump_velocity(c, vel=(0.0, -v), omega=0.0, held=True)
+        sim.run(n)
+        steps += n
+        if progress is not None:
+            progress(n)
+    sim.set_clump_velocity(c, vel=(0.0, 0.0), omega=0.0, held=True)
+    return steps
+
+
+def add_loading_ball(rig):
+    """A ball on top of the plate at its centre (the loading element of the test)."""
+    p, sim, lay = rig.params, rig.sim, rig.layout
+    c = lay.plate
+    cx, cy = sim.clumps.pos[c]
+    top = max(sim.balls.pos[i, 1] + sim.balls.rad[i] for i in lay.plate_balls)
+    r = p.loading_ball_radius_m
+    n0 = len(sim.balls)
+    lay.loading = int(sim.add_clump([cx], [top + r], [r], p.loading_ball_density_kg_m3,
+                                    material_id=STEEL))
+    lay.loading_ball = n0
+
+
+def relax(rig, progress=None):
+    """Stage d (second half): bonds back to their Table 4.2 strength (the factor is a power
+    of two in the default config, so this is exact), plate released, loading ball resting
+    on it, ``relax_steps`` steps with normal gravity and loading damping."""
+    p, sim, lay = rig.params, rig.sim, rig.layout
+    sim.scale_bond_strength(1.0 / p.drop_bond_factor)
+    sim.set_damping(p.damping)
+    sim.set_clump_velocity(lay.plate, held=False)
+    chunk = max(1, p.relax_steps // 20)
+    done = 0
+    while done < p.relax_steps:
+        k = min(chunk, p.relax_steps - done)
+        sim.run(k)
+        done += k
+        if progress is not None:
+            progress(k)
+    return p.relax_steps
+
+
+def assemble(lib, params, seed, progress=None):
+    """All of 4.2.2: returns the relaxed BoxRig (loading ball not yet loaded)."""
+    rig = build_tall(lib, params, seed)
+    st = rig.layout.stage_steps
+    st["drop"] = drop(rig, progress)
+    st["tamping"] = tamp(rig, progress)
+    st["reset"] = move_side_walls(rig, progress)
+    st["plate"] = settle_plate(rig, progress)
+    add_loading_ball(rig)
+    st["relax"] = relax(rig, progress)
+    return rig

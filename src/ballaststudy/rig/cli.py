@@ -1,0 +1,123 @@
+"""`ballaststudy case ...`: assemble a box-test case from a BPM library and load it.
+
+    ballaststudy case assemble BPM.nc --case K --out results/cases/DB/caseK/assembled.nc
+    ballaststudy case run ASSEMBLED.nc --cycles N --out results/cases/DB/caseK/metrics.nc
+
+``register(subparsers)`` adds the ``case`` stage to the main parser (wired in cli.py).
+"""
+import sys
+import time
+from pathlib import Path
+
+from tqdm import tqdm
+
+from ..config import ConfigError, load_config
+from .params import RigParams, case_seed
+
+
+def _params(args):
+    cfg = load_config(args.config)
+    return cfg, RigParams.from_config(cfg.get("rig", {}))
+
+
+def _case_assemble(args):
+    from .assembly import assemble
+    from .library import LibraryError, load_library
+    cfg, params = _params(args)
+    try:
+        lib = load_library(args.library)
+    except LibraryError as err:
+        raise ConfigError(args.library, None, str(err)) from None
+    seed = args.seed if args.seed is not None else case_seed(cfg["seed"], lib.database, args.case)
+    t0 = time.time()
+    bar = tqdm(desc=f"assemble {lib.database} case {args.case}", unit="step", disable=args.quiet,
+               unit_scale=True)
+    rig = assemble(lib, params, seed, progress=bar.update)
+    bar.close()
+    rig.save(args.out, attrs={"case": args.case, "library_file": str(args.library),
+                              "assembly_seconds": round(time.time() - t0, 1)})
+    lay = rig.layout
+    if not args.quiet:
+        print(f"wrote {args.out}: {len(lay.stone_library_index)} stones, "
+              f"{rig.stone_balls().size} balls, {lay.bonds_installed} bonds, "
+              f"steps {lay.stage_steps}")
+
+
+def _case_run(args):
+    from .box import BoxRig
+    from .loading import LoadingRun
+    from .output import write_outputs
+    out = Path(args.out)
+    ckpt = out.with_name(out.stem + ".checkpoint.npz")
+    cfg, params = _params(args)
+    if ckpt.exists() and not args.restart:
+        run = LoadingRun.from_checkpoint(ckpt, cycles=args.cycles,
+                                         checkpoint_every=args.checkpoint_every)
+        if not args.quiet:
+            print(f"resuming from {ckpt} (cycle {run.s['cycle']}, step {run.rig.sim.step})")
+    else:
+        if not Path(args.assembled).is_file():
+            raise ConfigError(args.assembled, None, "file not found")
+        rig = BoxRig.load(args.assembled)
+        rig.params = params
+        run = LoadingRun(rig, args.cycles, checkpoint=ckpt,
+                         checkpoint_every=args.checkpoint_every)
+    vtk_dir = None if args.no_vtk else out.with_name("vtk")
+    if vtk_dir is not None:
+        from .vtk import vtk_hook
+        run.hooks.append(vtk_hook(vtk_dir, params.vtk_cycles, args.cycles))
+    bar = tqdm(total=args.cycles, initial=run.s["cycle"], desc="cycles", unit="cycle",
+               disable=args.quiet)
+    last = [run.s["cycle"], None]
+
+    def progress(phase, cycle):
+        if cycle != last[0]:
+            bar.update(cycle - last[0])
+            last[0] = cycle
+        if phase != last[1]:
+            last[1] = phase
+            bar.set_postfix_str(phase)
+
+    run.run(progress=progress, stop_after=args.stop_after)
+    bar.close()
+    if run.s["phase"] != "done":
+        print(f"stopped after cycle {run.s['cycle']} (checkpoint {ckpt})", file=sys.stderr)
+        return
+    write_outputs(run, out, figures=not args.no_figures,
+                  attrs={"assembled_file": str(args.assembled)})
+    if not args.quiet:
+        print(f"wrote {out}")
+
+
+def register(subparsers):
+    """Add the ``case`` stage (actions ``assemble`` and ``run``)."""
+    c = subparsers.add_parser("case", help="box-test cases: assembly and loading (thesis 4.2.2-4.2.3)")
+    cs = c.add_subparsers(dest="action", required=True)
+
+    a = cs.add_parser("assemble", help="drop, tamp and relax stones from a BPM library")
+    a.add_argument("library", metavar="BPM.nc", type=Path)
+    a.add_argument("--case", type=int, required=True, help="case number (selects the seed)")
+    a.add_argument("--out", required=True, type=Path, help="assembled state (.nc)")
+    a.add_argument("--seed", type=int, help="override the seed derived from (study seed, database, case)")
+    a.add_argument("--config", default="config/config.yaml", type=Path)
+    a.add_argument("--quiet", action="store_true")
+    a.set_defaults(func=_case_assemble)
+
+    r = cs.add_parser("run", help="static pre-loading, cyclic loading, metrics.nc")
+    r.add_argument("assembled", metavar="ASSEMBLED.nc", type=Path)
+    r.add_argument("--cycles", type=int, required=True, help="loading cycles (thesis 1000)")
+    r.add_argument("--out", required=True, type=Path, help="metrics file (.nc)")
+    r.add_argument("--checkpoint-every", type=int, help="cycles between checkpoints (config default)")
+    r.add_argument("--restart", action="store_true", help="ignore an existing checkpoint")
+    r.add_argument("--stop-after", type=int, help=argparse_suppress())
+    r.add_argument("--no-vtk", action="store_true", help="write no VTK snapshots")
+    r.add_argument("--no-figures", action="store_true", help="write no PNG figures")
+    r.add_argument("--config", default="config/config.yaml", type=Path)
+    r.add_argument("--quiet", action="store_true")
+    r.set_defaults(func=_case_run)
+    return c
+
+
+def argparse_suppress():
+    import argparse
+    return argparse.SUPPRESS

@@ -1,0 +1,45 @@
+# Stage 3: box-test cases (thesis 4.2.2, 4.2.3): one assembly and one loading run per
+# (database, case). Inputs: the bpm stage's library results/bpm/{db}.nc.
+# Config: rig (assembly and loading parameters), rig.cycles; cases per database:
+# config["cases"] (default 10, as in the thesis).
+import json
+
+CASES = list(range(int(config.get("cases", 10))))
+
+
+rule case_assemble:
+    input:
+        bpm=f"{RESULTS}/bpm/{{db}}.nc",
+    output:
+        f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
+    params:
+        rig=json.dumps(config.get("rig", {}), sort_keys=True),   # editing rig: reassemble
+        config=CONFIG_FILE,
+    log:
+        f"{RESULTS}/logs/cases/{{db}}/case{{case}}_assemble.log",
+    shell:
+        "ballaststudy case assemble {input.bpm} --case {wildcards.case} --config {params.config} "
+        "--out {output} --quiet > {log} 2>&1"
+
+
+rule case_run:
+    input:
+        f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
+    output:
+        metrics=f"{RESULTS}/cases/{{db}}/case{{case}}/metrics.nc",
+        case_png=f"{RESULTS}/cases/{{db}}/case{{case}}/case.png",
+        curves=f"{RESULTS}/cases/{{db}}/case{{case}}/behaviours.png",
+    params:
+        cycles=config.get("rig", {}).get("cycles", 1000),
+        config=CONFIG_FILE,
+    log:
+        f"{RESULTS}/logs/cases/{{db}}/case{{case}}_run.log",
+    shell:
+        # a rerun after an interruption resumes from metrics.checkpoint.npz beside the output
+        "ballaststudy case run {input} --cycles {params.cycles} --config {params.config} "
+        "--out {output.metrics} --quiet > {log} 2>&1"
+
+
+rule cases_all:
+    input:
+        expand(f"{RESULTS}/cases/{{db}}/case{{case}}/metrics.nc", db=NAMES, case=CASES),
