@@ -58,7 +58,7 @@ def build(n, bonded=False):
     sim = Simulation(thickness=1.0, gravity=(0.0, -9.81), damping=0.0, dt=p["dt"],
                      skin=p["skin"], domain=(-0.01, -0.01, W + 0.01, 4.0 * h + 1.0),
                      law="hooke", hooke={k: p[k] for k in ("kn", "kt", "gamma_n", "gamma_t", "mu")},
-                     track_energy=False, vmax=1.0e3)
+                     vmax=1.0e3)
     x, y, d, vx, vy = initial_state(n)
     stone = -np.ones(n, np.int64)
     if bonded:

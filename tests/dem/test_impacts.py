@@ -84,3 +84,23 @@ def test_case3_oblique_wall_impact_sliding():
     for name, got, ref in (("dv_t", dvt, -2 * mu * vn), ("domega", dw, -4 * mu * vn / R),
                            ("v_n after", sim.balls.vel[0, 1], vn)):
         assert abs(got - ref) <= 0.02 * abs(ref), f"{name} measured {got:.6g} analytical {ref:.6g}"
+
+
+def test_hooke_law_restitution_matches_lammps_setup():
+    """The benchmark law (LAMMPS gran/hooke/history, m_eff damping, no clamp): gamma_n
+    chosen for e = 0.5 between two 6 mm disks -> measured e = 0.5, t_c = pi / omega_d."""
+    rho, r, kn = 2650.0, 0.003, 1.0e6
+    meff = rho * math.pi * r * r / 2
+    zeta = -math.log(0.5) / math.sqrt(math.pi ** 2 + math.log(0.5) ** 2)
+    gn = 2 * zeta * math.sqrt(kn / meff)
+    tc = math.pi / (math.sqrt(kn / meff) * math.sqrt(1 - zeta ** 2))
+    dt = tc / 400
+    sim = Simulation(gravity=(0, 0), dt=dt, domain=(-1, -1, 1, 1), law="hooke",
+                     hooke=dict(kn=kn, kt=2 * kn / 7, gamma_n=gn, gamma_t=gn / 2, mu=0.5))
+    sim.add_balls([-r - 1e-4, r + 1e-4], [0, 0], [r, r], rho, vx=[0.5, -0.5])
+    touching = []
+    sim.run(int(2 * tc / dt), callback=lambda s: touching.append(s.pairs.fn[0] != 0), every=1)
+    e = (sim.balls.vel[1, 0] - sim.balls.vel[0, 0]) / 1.0
+    dur = sum(touching) * dt
+    assert abs(e - 0.5) <= 0.005, f"hooke restitution measured {e:.5f} expected 0.5"
+    assert abs(dur - tc) <= 0.01 * tc, f"hooke contact duration {dur:.4e} expected {tc:.4e}"

@@ -4,9 +4,13 @@ Public API: ``Simulation`` (build, run, measure, checkpoint), parameter dataclas
 ``ContactMaterial`` / ``FlatJointMaterial``, ``SimulationError``, ``inertial_number``,
 ``BREAK_MODES``.
 """
-from .materials import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial
-from .output import inertial_number
-from .simulation import Simulation, SimulationError
+from . import _cache
+
+_cache.refresh()    # before any kernel is loaded from the numba cache
+
+from .materials import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial  # noqa: E402
+from .output import inertial_number  # noqa: E402
+from .simulation import Simulation, SimulationError  # noqa: E402
 
 BREAK_MODES = ("tension", "shear")
 

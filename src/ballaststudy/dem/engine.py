@@ -1,7 +1,7 @@
 """The fused stepping kernel: K steps of velocity Verlet inside numba, no Python per step.
 
-One step: half kick + drift (balls, clumps, walls) -> Verlet rebuild if any ball moved
-more than skin/2 since the last build (wall motion counted) -> weight -> ball-ball
+One step: half kick + drift (balls, clumps, walls) + force reset -> Verlet rebuild if two
+balls (or a ball and a wall) may have closed the skin since the last build -> ball-ball
 contacts -> flat joints -> ball-wall contacts -> clump sums -> local damping + half kick
 -> guards. Returns early with a status code when a guard trips (after the full step).
 """
@@ -11,8 +11,8 @@ from numba import njit
 from . import params as P
 from .bonds import bond_forces
 from .clumps import gather_clumps, place_pebbles
-from .contacts import pack_kinematics, pair_forces
-from .integrate import critical_dt, first_half, reset_forces, second_half
+from .contacts import pair_forces
+from .integrate import critical_dt, first_half, pebbles_moved, second_half
 from .neighbours import grow_rows, rebuild
 from .walls import move_walls, wall_forces
 
@@ -33,23 +33,24 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
     prm[P.TIME] is advanced. Lists that needed more room are reallocated here, so the
     pair and wall-pair arrays are returned: (status, steps done, p_i, p_j, p_h, p_bond,
     p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)."""
-    half_skin2 = (0.5 * prm[P.SKIN]) ** 2
+    skin = prm[P.SKIN]
     kin = np.empty((pos.shape[0], 8))
     for k in range(nsteps):
         dt = prm[P.DT]
         dt_next = dt
-        dmax2 = first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
-                           pos0, cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia,
-                           cheld)
+        d1, d2 = first_half(dt, prm[P.GX], prm[P.GY], pos, vel, omega, force, moment, mass,
+                            fext, minv, iinv, rad, mat, fix, clump, alive, pos0, kin,
+                            cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia,
+                            cheld)
         if cpos.shape[0] > 0:
             place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
+            d1, d2 = pebbles_moved(pos, vel, omega, force, moment, fext, minv, rad, mat, clump,
+                                   alive, pos0, kin, d1, d2)
         prm[P.WALL_TRAVEL] += move_walls(seg, wvel, womega, centre, dt)   # wall travel since build
-        for i in range(pos.shape[0] if cpos.shape[0] > 0 else 0):
-            if clump[i] >= 0 and alive[i]:
-                dx = pos[i, 0] - pos0[i, 0]
-                dy = pos[i, 1] - pos0[i, 1]
-                dmax2 = max(dmax2, dx * dx + dy * dy)
-        if cnt[2] > 0 or (dmax2 ** 0.5 + prm[P.WALL_TRAVEL]) ** 2 > half_skin2:
+        d1 = d1 ** 0.5
+        d2 = d2 ** 0.5
+        # exact validity of the lists: two balls closing in, or a ball and a wall
+        if cnt[2] > 0 or d1 + d2 > skin or d1 + prm[P.WALL_TRAVEL] > skin:
             while True:
                 st, need = rebuild(pos, rad, alive, clump, pos0, prm[P.SKIN], prm[P.XMIN],
                                    prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], p_i, p_j, p_h,
@@ -81,8 +82,6 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
                     dt_next = prm[P.DT_SAFETY] * dtc   # applies from the next step
         cnt[0] += 1
         prm[P.TIME] += dt
-        reset_forces(prm[P.GX], prm[P.GY], mass, fext, force, moment, clump, alive)
-        pack_kinematics(pos, vel, omega, rad, minv, mat, kin)
         pair_forces(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n[0],
                     b_active, lc, eacc)
         if b_i.shape[0] > 0:

@@ -16,15 +16,24 @@ from .contacts import LC_E, LC_KAPPA
 
 
 @njit(cache=True)
-def first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive, pos0,
-               cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia, cheld):
-    """Half kick + drift for free balls and free clumps; held dofs keep their velocity.
-    Returns the largest squared displacement of a free ball since the last neighbour
-    build (pebbles are checked by the caller after they are placed)."""
+def first_half(dt, gx, gy, pos, vel, omega, force, moment, mass, fext, minv, iinv, rad, mat,
+               fix, clump, alive, pos0, kin, cpos, cvel, comega, ctheta, cforce, cmoment,
+               cmass, cinertia, cheld):
+    """One pass per free ball: half kick (held dofs keep their velocity), drift, the
+    displacement since the last neighbour build, force reset to weight + external load,
+    and the packed row ``kin`` the pair loop reads. Then half kick + drift of clumps.
+    Returns the two largest squared displacements (the Verlet list stays valid while
+    d1 + d2 < skin: only two different balls can close a gap)."""
     h = 0.5 * dt
-    dmax2 = 0.0
+    d1 = 0.0
+    d2 = 0.0
     for i in range(pos.shape[0]):
-        if not alive[i] or clump[i] >= 0:
+        if clump[i] >= 0:
+            continue
+        if not alive[i]:
+            force[i, 0] = 0.0
+            force[i, 1] = 0.0
+            moment[i] = 0.0
             continue
         f = fix[i]
         if not (f & 1):
@@ -39,7 +48,24 @@ def first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive
         pos[i, 1] = y
         dx = x - pos0[i, 0]
         dy = y - pos0[i, 1]
-        dmax2 = max(dmax2, dx * dx + dy * dy)
+        dd = dx * dx + dy * dy
+        if dd > d2:
+            if dd > d1:
+                d2 = d1
+                d1 = dd
+            else:
+                d2 = dd
+        force[i, 0] = mass[i] * gx + fext[i, 0]
+        force[i, 1] = mass[i] * gy + fext[i, 1]
+        moment[i] = 0.0
+        kin[i, 0] = x
+        kin[i, 1] = y
+        kin[i, 2] = vel[i, 0]
+        kin[i, 3] = vel[i, 1]
+        kin[i, 4] = omega[i]
+        kin[i, 5] = rad[i]
+        kin[i, 6] = minv[i]
+        kin[i, 7] = mat[i]
     for c in range(cpos.shape[0]):
         if not cheld[c]:
             cvel[c, 0] += h * cforce[c, 0] / cmass[c]
@@ -48,13 +74,43 @@ def first_half(dt, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive
         cpos[c, 0] += dt * cvel[c, 0]
         cpos[c, 1] += dt * cvel[c, 1]
         ctheta[c] += dt * comega[c]
-    return dmax2
+    return d1, d2
+
+
+@njit(cache=True)
+def pebbles_moved(pos, vel, omega, force, moment, fext, minv, rad, mat, clump, alive, pos0,
+                  kin, d1, d2):
+    """After ``place_pebbles``: displacement, force reset (external load only: the clump
+    carries the weight) and packed rows for pebbles. Returns the updated top-2."""
+    for i in range(pos.shape[0]):
+        if clump[i] < 0 or not alive[i]:
+            continue
+        dx = pos[i, 0] - pos0[i, 0]
+        dy = pos[i, 1] - pos0[i, 1]
+        dd = dx * dx + dy * dy
+        if dd > d2:
+            if dd > d1:
+                d2 = d1
+                d1 = dd
+            else:
+                d2 = dd
+        force[i, 0] = fext[i, 0]
+        force[i, 1] = fext[i, 1]
+        moment[i] = 0.0
+        kin[i, 0] = pos[i, 0]
+        kin[i, 1] = pos[i, 1]
+        kin[i, 2] = vel[i, 0]
+        kin[i, 3] = vel[i, 1]
+        kin[i, 4] = omega[i]
+        kin[i, 5] = rad[i]
+        kin[i, 6] = minv[i]
+        kin[i, 7] = mat[i]
+    return d1, d2
 
 
 @njit(cache=True)
 def reset_forces(gx, gy, mass, fext, force, moment, clump, alive):
-    """Forces start each step at weight + external load (pebbles: the clump carries the
-    weight, the load goes through the pebble to the clump)."""
+    """Forces = weight + external load (pebbles: load only). Used before the first step."""
     for i in range(mass.shape[0]):
         if alive[i] and clump[i] < 0:
             force[i, 0] = mass[i] * gx + fext[i, 0]
@@ -87,6 +143,12 @@ def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, ali
     h = 0.5 * dt
     alpha = prm[P.ALPHA]
     el = 0.0
+    vmax2 = prm[P.VMAX] ** 2
+    x0 = prm[P.XMIN]
+    x1 = prm[P.XMAX]
+    y0 = prm[P.YMIN]
+    y1 = prm[P.YMAX]
+    suspect = cvel.shape[0] > 0          # pebbles are not checked in the loop below
     for i in range(pos.shape[0]):
         if not alive[i] or clump[i] >= 0:
             continue
@@ -106,6 +168,13 @@ def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, ali
             vel[i, 1] += h * force[i, 1] * minv[i]
         if not (f & 4):
             omega[i] += h * moment[i] * iinv[i]
+        # guard pre-check, branch free; NaN fails every comparison
+        x = pos[i, 0]
+        y = pos[i, 1]
+        v2 = vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1]
+        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(omega[i]) < 1e300)
+        if not ok:
+            suspect = True
     alpha = prm[P.ALPHA_CLUMP]
     for c in range(cvel.shape[0]):
         if cheld[c]:
@@ -123,7 +192,9 @@ def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, ali
         cvel[c, 1] += h * cforce[c, 1] / cmass[c]
         comega[c] += h * cmoment[c] / cinertia[c]
     eacc[P.E_LOCAL] += el
-    return guards(prm, pos, vel, omega, alive, err)
+    if suspect:
+        return guards(prm, pos, vel, omega, alive, err)
+    return P.OK
 
 
 @njit(cache=True)

@@ -27,7 +27,6 @@ AUTO_DT = 18      # 1 = recompute dt = f*dt_crit at every neighbour rebuild
 DT_SAFETY = 19    # f [-]
 DSCALE = 20       # 1 = density scaling (inertial masses set so that dt_crit = dt/f)
 TIME = 21         # simulated time [s]
-TRACK_ENERGY = 22  # 1 = accumulate dissipated energies
 WALL_TRAVEL = 23  # wall endpoint travel since the last neighbour build [m]
 NPRM = 24
 
@@ -59,5 +58,4 @@ def new_params():
     p[VMAX] = 1.0e3
     p[DT_SAFETY] = 0.8
     p[AUTO_DT] = 1.0
-    p[TRACK_ENERGY] = 1.0
     return p

@@ -51,12 +51,11 @@ class Simulation:
     vmax : runaway guard [m/s].
     density_scaling : raise inertial masses so that the given ``dt`` is stable
         (quasi-static stages only; report ``inertial_number``).
-    track_energy : accumulate dissipated energies (small cost).
     """
 
     def __init__(self, thickness=1.0, gravity=(0.0, -9.81), damping=0.0, clump_damping=None,
                  dt=None, dt_safety=0.8, skin=None, domain=None, law="pfc", hooke=None,
-                 n_elements=1, vmax=1.0e3, density_scaling=False, track_energy=True):
+                 n_elements=1, vmax=1.0e3, density_scaling=False):
         self.prm = P.new_params()
         p = self.prm
         p[P.THICK] = thickness
@@ -68,7 +67,6 @@ class Simulation:
         p[P.DT] = dt if dt is not None else 0.0
         p[P.VMAX] = vmax
         p[P.DSCALE] = 1.0 if density_scaling else 0.0
-        p[P.TRACK_ENERGY] = 1.0 if track_energy else 0.0
         if density_scaling and dt is None:
             raise ValueError("density_scaling needs a fixed dt")
         if law not in ("pfc", "hooke"):
@@ -431,6 +429,18 @@ class Simulation:
         ids = np.nonzero(bad & live)[0]
         more = f" ... ({len(ids)} in total)" if len(ids) > limit else ""
         return ids[:limit].tolist().__repr__() + more
+
+    def inertial_number(self, shear_rate, pressure, d=None, rho=None):
+        """I = shear_rate * d * sqrt(rho / p) for a stage: quasi-static while I << 1e-3.
+        d, rho default to the mean diameter and mean density of the live balls."""
+        b = self.balls
+        live = b.alive == 1
+        if d is None:
+            d = 2.0 * float(b.rad[live].mean())
+        if rho is None:
+            area = np.pi * b.rad[live] ** 2 * self.prm[P.THICK]
+            rho = float((b.mass[live] / area).mean())
+        return output.inertial_number(shear_rate, d, rho, pressure)
 
     # ------------------------------------------------------------------ checkpoint
     def save_checkpoint(self, path):
