@@ -1,0 +1,23 @@
+# Stage 2: bonded particle models of the 2D forms (thesis 4.2.1), one library per database.
+import json
+
+
+rule bpm_build:
+    input:
+        f"{RESULTS}/forms/{{db}}.nc",
+    output:
+        f"{RESULTS}/bpm/{{db}}.nc",
+    params:
+        # the bpm settings and the study seed: editing them reruns every library
+        bpm=json.dumps(config.get("bpm") or {}, sort_keys=True),
+        seed=config["seed"],
+        config=CONFIG_FILE,
+    log:
+        f"{RESULTS}/logs/bpm/{{db}}.log",
+    shell:
+        "ballaststudy bpm build {input} --out {output} --config {params.config} --quiet > {log} 2>&1"
+
+
+rule bpm_all:
+    input:
+        expand(f"{RESULTS}/bpm/{{db}}.nc", db=NAMES),
