@@ -62,14 +62,15 @@ def build(n, bonded=False):
     x, y, d, vx, vy = initial_state(n)
     stone = -np.ones(n, np.int64)
     if bonded:
-        # clusters of ~100 balls: blocks of 10 x 10 lattice sites, disks grown to touch
+        # the same disks, grouped in clusters of 100: blocks of 10 x 10 lattice sites
         stone = (np.floor(y / S) // 10) * (NCOL // 10) + (np.floor(x / S) // 10)
-        d = np.full(n, S * 0.999)
     sim.add_balls(x, y, d / 2, RHO, stone_id=stone, vx=vx, vy=vy)
     sim.add_wall([(0.0, h * 4.0 + 1.0), (0.0, 0.0), (W, 0.0), (W, h * 4.0 + 1.0)])
     if bonded:
+        # installation gap 2.5 R_min bonds every lattice neighbour of a block (gaps
+        # 0.5-4.5 mm); E* = 1e6 Pa gives bond k_n A ~ the contact kn (same dt)
         sim.install_flat_joints(FlatJointMaterial(E=1.0e6, kappa=3.5, sigma_c=1e5,
-                                                  c=1e5, gap_factor=0.4))
+                                                  c=1e5, gap_factor=2.5))
     return sim
 
 

@@ -41,6 +41,26 @@ def _strip(gc, th, a, b, compressed_only):
     return i0, i1
 
 
+@njit(cache=True, inline="always")
+def _strip_sq(gc, th, a, b, compressed_only):
+    """Integral of g(s)^2 over [a, b] (restricted to g < 0 if asked): strain energy."""
+    if compressed_only:
+        if th == 0.0:
+            if gc >= 0.0:
+                return 0.0
+        else:
+            root = gc / th
+            if th > 0.0:
+                a = max(a, root)
+            else:
+                b = min(b, root)
+            if b <= a:
+                return 0.0
+    fb = gc * gc * b - gc * th * b * b + th * th * b ** 3 / 3.0
+    fa = gc * gc * a - gc * th * a * a + th * th * a ** 3 / 3.0
+    return fb - fa
+
+
 @njit(cache=True)
 def bond_forces(prm, step, pos, vel, omega, rad, stone, force, moment,
                 b_i, b_j, b_active, rbar, d0, gi, kn, ks, sigc, coh, tanphi, bmu,
@@ -81,6 +101,7 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, force, moment,
             a = -rbar[b] + e * le
             se = a + 0.5 * le
             fs = bfs[b, e] - ks[b] * ae * vt * dt
+            e_break = -1.0
             if state[b, e]:
                 i0, i1 = _strip(gc, th, a, a + le, False)
                 fn = kn[b] * t * i0
@@ -106,8 +127,9 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, force, moment,
                     l_stress[k] = sig if mode == MODE_TENSION else tau
                     l_n[0] = k + 1
                     state[b, e] = 0
-                    eacc[P.E_BREAKAGE] += (0.5 * fn * fn / (kn[b] * ae) + 0.5 * fs * fs / (ks[b] * ae)
-                                           + 0.5 * kn[b] * ie * th * th)
+                    # strain energy before the break; what survives is subtracted below
+                    e_break = (0.5 * kn[b] * t * _strip_sq(gc, th, a, a + le, False)
+                               + 0.5 * fs * fs / (ks[b] * ae))
                 else:
                     nbonded += 1
             if not state[b, e]:
@@ -116,8 +138,13 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, force, moment,
                 fn = kn[b] * t * i0
                 lim = bmu[b] * max(-fn, 0.0)
                 if abs(fs) > lim:
-                    eacc[P.E_FRICTION] += lim * (abs(fs) - lim) / (ks[b] * ae)
+                    if e_break < 0.0:
+                        eacc[P.E_FRICTION] += lim * (abs(fs) - lim) / (ks[b] * ae)
                     fs = lim if fs > 0.0 else -lim
+                if e_break >= 0.0:
+                    eacc[P.E_BREAKAGE] += e_break - (
+                        0.5 * kn[b] * t * _strip_sq(gc, th, a, a + le, True)
+                        + 0.5 * fs * fs / (ks[b] * ae))
             bfn[b, e] = fn
             bfs[b, e] = fs
             ftot_n += fn
@@ -158,22 +185,7 @@ def bond_energy(pos, b_i, b_j, b_active, rbar, d0, kn, ks, theta, state, bfs, th
         le = 2.0 * rbar[b] / ne
         for e in range(ne):
             a = -rbar[b] + e * le
-            lo, hi = a, a + le
-            if not state[b, e]:
-                if th == 0.0:
-                    if gc >= 0.0:
-                        hi = lo
-                else:
-                    root = gc / th
-                    if th > 0.0:
-                        lo = max(lo, root)
-                    else:
-                        hi = min(hi, root)
-            if hi > lo:
-                # int (gc - th s)^2 ds = [gc^2 s - gc th s^2 + th^2 s^3 / 3]
-                fh = gc * gc * hi - gc * th * hi * hi + th * th * hi ** 3 / 3.0
-                fl = gc * gc * lo - gc * th * lo * lo + th * th * lo ** 3 / 3.0
-                e_tot += 0.5 * kn[b] * thick * (fh - fl)
+            e_tot += 0.5 * kn[b] * thick * _strip_sq(gc, th, a, a + le, not state[b, e])
             e_tot += 0.5 * bfs[b, e] ** 2 / (ks[b] * le * thick)
     return e_tot
 

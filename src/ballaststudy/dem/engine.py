@@ -20,9 +20,9 @@ from .walls import move_walls, wall_forces
 @njit(cache=True)
 def run_steps(nsteps, prm, cnt, err, eacc, lc,
               pos, vel, omega, rad, mass, inertia, minv, iinv, force, moment,
-              stone, mat, fix, clump, offset, alive, pos0, fext,
+              stone, mat, fix, clump, offset, alive, pos0, fext, damp,
               seg, wvel, womega, centre, wforce, wmoment, wmat, link,
-              cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment,
+              cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment, cdamp,
               p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n,
               w_i, w_s, w_h, w_fn, w_fs, w_n,
               b_i, b_j, b_active, rbar, d0, gi, bkn, bks, sigc, coh, tanphi, bmu,
@@ -97,7 +97,8 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
             gather_clumps(prm[P.GX], prm[P.GY], pos, force, moment, clump, alive, cpos, cmass,
                           cforce, cmoment)
         st = second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
-                         cvel, comega, cforce, cmoment, cmass, cinertia, cheld, eacc, err)
+                         damp, cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp,
+                         eacc, err)
         if cpos.shape[0] > 0:
             place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
         prm[P.DT] = dt_next

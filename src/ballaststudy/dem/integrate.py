@@ -135,13 +135,13 @@ def _damped(f, v, alpha):
 
 
 @njit(cache=True)
-def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
-                cvel, comega, cforce, cmoment, cmass, cinertia, cheld, eacc, err):
-    """Local damping + half kick; then the guards. Returns a status code and puts the
-    offending ball id and value in err[0], err[1]."""
+def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive, damp,
+                cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp, eacc, err):
+    """Local damping (per body: ``damp``, ``cdamp``; not on velocity-held dofs) + half
+    kick; then the guards. Returns a status code and puts the offending ball id and
+    value in err[0], err[1]."""
     dt = prm[P.DT]
     h = 0.5 * dt
-    alpha = prm[P.ALPHA]
     el = 0.0
     vmax2 = prm[P.VMAX] ** 2
     x0 = prm[P.XMIN]
@@ -153,15 +153,20 @@ def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, ali
         if not alive[i] or clump[i] >= 0:
             continue
         f = fix[i]
+        alpha = damp[i]
         if alpha > 0.0:
-            fx = _damped(force[i, 0], vel[i, 0], alpha)
-            fy = _damped(force[i, 1], vel[i, 1], alpha)
-            mz = _damped(moment[i], omega[i], alpha)
-            el -= ((fx - force[i, 0]) * vel[i, 0] + (fy - force[i, 1]) * vel[i, 1]
-                   + (mz - moment[i]) * omega[i]) * dt
-            force[i, 0] = fx
-            force[i, 1] = fy
-            moment[i] = mz
+            if not (f & 1):
+                fx = _damped(force[i, 0], vel[i, 0], alpha)
+                el -= (fx - force[i, 0]) * vel[i, 0] * dt
+                force[i, 0] = fx
+            if not (f & 2):
+                fy = _damped(force[i, 1], vel[i, 1], alpha)
+                el -= (fy - force[i, 1]) * vel[i, 1] * dt
+                force[i, 1] = fy
+            if not (f & 4):
+                mz = _damped(moment[i], omega[i], alpha)
+                el -= (mz - moment[i]) * omega[i] * dt
+                moment[i] = mz
         if not (f & 1):
             vel[i, 0] += h * force[i, 0] * minv[i]
         if not (f & 2):
@@ -175,10 +180,10 @@ def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, ali
         ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(omega[i]) < 1e300)
         if not ok:
             suspect = True
-    alpha = prm[P.ALPHA_CLUMP]
     for c in range(cvel.shape[0]):
         if cheld[c]:
             continue
+        alpha = cdamp[c]
         if alpha > 0.0:
             fx = _damped(cforce[c, 0], cvel[c, 0], alpha)
             fy = _damped(cforce[c, 1], cvel[c, 1], alpha)

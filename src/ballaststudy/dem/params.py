@@ -8,8 +8,8 @@ import numpy as np
 DT = 0            # timestep [s]
 GX = 1            # gravity x [m/s^2]
 GY = 2            # gravity y [m/s^2]
-ALPHA = 3         # PFC local damping coefficient for free balls [-]
-ALPHA_CLUMP = 4   # local damping coefficient for clumps [-]
+ALPHA = 3         # default local damping of balls added later (per-ball array in state)
+ALPHA_CLUMP = 4   # default for clumps added later
 THICK = 5         # out-of-plane thickness t [m]
 SKIN = 6          # Verlet skin [m]
 LAW = 7           # contact law: 0 = PFC linear + dashpots, 1 = LAMMPS gran/hooke/history

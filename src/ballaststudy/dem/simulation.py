@@ -36,7 +36,8 @@ class Simulation:
     ----------
     thickness : out-of-plane thickness t [m] (PFC2D: 1 m).
     gravity : gravity vector [m/s^2].
-    damping : PFC local damping alpha for balls (0.7 = PFC material-genesis default).
+    damping : PFC local damping alpha for balls (0.7 = PFC material-genesis default);
+        stored per ball, change with ``set_damping``.
     clump_damping : local damping for clumps (default: same as ``damping``).
     dt : fixed timestep [s]; None = automatic, dt = dt_safety * dt_crit recomputed at
         every neighbour rebuild.
@@ -135,7 +136,8 @@ class Simulation:
         ids = self.balls.append(
             pos=np.column_stack([x, y]), vel=np.column_stack(np.broadcast_arrays(vx, vy, x)[:2]),
             omega=omega, rad=r, mass=m, inertia=inertia, minv=1.0 / m, iinv=1.0 / inertia,
-            stone=stone_id, mat=mat, fix=0, clump=-1, alive=1, pos0=np.column_stack([x, y]))
+            stone=stone_id, mat=mat, fix=0, clump=-1, alive=1, pos0=np.column_stack([x, y]),
+            damp=self.prm[P.ALPHA])
         self._touch()
         return ids
 
@@ -181,7 +183,7 @@ class Simulation:
         m = m if mass is None else mass
         ii = ii if inertia is None else inertia
         cid = self.clumps.append(pos=(cx, cy), vel=vel, omega=omega, mass=m, inertia=ii,
-                                 held=1 if held else 0)
+                                 held=1 if held else 0, damp=self.prm[P.ALPHA_CLUMP])
         ids = self.add_balls(x, y, r, density, stone_id=stone_id, material_id=material_id)
         self.balls.clump[ids] = cid
         self.balls.offset[ids] = np.column_stack([x - cx, y - cy])
@@ -283,9 +285,21 @@ class Simulation:
         self.bonds.sigc[idx] *= factor
         self.bonds.coh[idx] *= factor
 
-    def set_damping(self, alpha, clump_alpha=None):
-        self.prm[P.ALPHA] = alpha
-        self.prm[P.ALPHA_CLUMP] = alpha if clump_alpha is None else clump_alpha
+    def set_damping(self, alpha=None, balls=None, clump_alpha=None, clumps=None):
+        """PFC local damping per body. ``alpha`` for ``balls`` (default: all balls, and
+        the default for balls added later); ``clump_alpha`` for ``clumps`` likewise."""
+        if alpha is not None:
+            if balls is None:
+                self.prm[P.ALPHA] = alpha
+                self.balls.damp[:] = alpha
+            else:
+                self.balls.damp[balls] = alpha
+        if clump_alpha is not None:
+            if clumps is None:
+                self.prm[P.ALPHA_CLUMP] = clump_alpha
+                self.clumps.damp[:] = clump_alpha
+            else:
+                self.clumps.damp[clumps] = clump_alpha
 
     def set_gravity(self, g):
         self.prm[P.GX], self.prm[P.GY] = g
@@ -400,9 +414,9 @@ class Simulation:
         out = run_steps(k, self.prm, self.cnt, self.err, self.eacc, self.lc,
                         b.pos, b.vel, b.omega, b.rad, b.mass, b.inertia, b.minv, b.iinv,
                         b.force, b.moment, b.stone, b.mat, b.fix, b.clump, b.offset, b.alive,
-                        b.pos0, b.fext, w.seg, w.vel, w.omega, w.centre, w.force, w.moment, w.mat,
+                        b.pos0, b.fext, b.damp, w.seg, w.vel, w.omega, w.centre, w.force, w.moment, w.mat,
                         w.link, c.pos, c.vel, c.omega, c.theta, c.mass, c.inertia, c.held,
-                        c.force, c.moment, pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs, pr.n,
+                        c.force, c.moment, c.damp, pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs, pr.n,
                         wp.i, wp.s, wp.hist, wp.fn, wp.fs, wp.n,
                         bd.i, bd.j, bd.active, bd.rbar, bd.d0, bd.gi, bd.kn, bd.ks, bd.sigc,
                         bd.coh, bd.tanphi, bd.mu, bd.theta, bd.moment, bd.state, bd.fn, bd.fs,

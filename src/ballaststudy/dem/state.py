@@ -52,6 +52,7 @@ class Balls(_Arrays):
     alive: np.ndarray = _z(0, dtype=np.uint8)
     pos0: np.ndarray = _z(0, 2)       # positions at the last neighbour build
     fext: np.ndarray = _z(0, 2)       # external force set by the caller (a load) [N]
+    damp: np.ndarray = _z(0)          # PFC local damping coefficient alpha [-]
 
     def __len__(self):
         return self.pos.shape[0]
@@ -105,6 +106,7 @@ class Clumps(_Arrays):
     held: np.ndarray = _z(0, dtype=np.uint8)
     force: np.ndarray = _z(0, 2)      # net force incl. gravity [N]
     moment: np.ndarray = _z(0)        # net moment about the centre of mass [N m]
+    damp: np.ndarray = _z(0)          # local damping coefficient alpha [-]
 
     def __len__(self):
         return self.pos.shape[0]
