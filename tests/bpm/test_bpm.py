@@ -2,6 +2,7 @@
 file format and errors. Small: a few stones from a tiny generated form database."""
 
 import argparse
+import json
 
 import numpy as np
 import pytest
@@ -15,7 +16,7 @@ from ballaststudy.bpm.build import build_stones, force_ratio
 from ballaststudy.bpm.cli import register
 from ballaststudy.bpm.library import open_forms
 from ballaststudy.config import ConfigError
-from ballaststudy.dem import ContactMaterial, Simulation
+from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation
 from ballaststudy.forms.database import stone_profiles
 
 MATERIALS = {"hard": {"mass_fraction": 0.7, "density_kg_m3": 2850.0},
@@ -225,4 +226,20 @@ def test_cli_builds_a_library(forms_file, tmp_path):
     ds = load_library(out)
     assert ds.sizes["stone"] == 4 and ds.attrs["radius_max_m"] == pytest.approx(6e-3)
     assert (out.parent / "b.nc.prov.json").is_file()
-    assert set(__import__("json").loads(ds.attrs["materials_json"])) >= {"hard", "soft", "F_str_co"}
+    mats = json.loads(ds.attrs["materials_json"])
+    assert FlatJointMaterial(**mats["hard"]["flat_joint"]) == FlatJointMaterial.hard()
+    assert FlatJointMaterial(**mats["soft"]["flat_joint"]) == FlatJointMaterial.soft()
+    assert mats["hard"]["flat_joint"]["sigma_c"] == pytest.approx(3.5 * 5.4e5)   # F_str-co
+    assert ContactMaterial(**mats["soft"]["contact"]) == ContactMaterial()
+    assert mats["soft"]["density_kg_m3"] == 2800.0
+
+
+def test_a_stone_does_not_depend_on_the_others_selected():
+    """The throw-in of a stone is seeded by (seed, its forms index), so a stone gets the same
+    balls whichever other stones are in the library."""
+    a, b = SQUARE, 0.8 * SQUARE
+    p = BpmParams(max_stones=None)
+    pair = build_stones([a, b], [0, 1], p, seed=3, ids=[4, 9])
+    alone = build_stones([b], [1], p, seed=3, ids=[9])
+    assert np.array_equal(pair[1].r, alone[0].r)
+    assert not np.array_equal(build_stones([b], [1], p, seed=3, ids=[8])[0].r, alone[0].r)

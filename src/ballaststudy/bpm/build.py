@@ -22,7 +22,7 @@ After d, balls that ended up in no bonded cluster with the rest of their stone (
 that would fall off at the first touch) and balls whose centre left the polygon are
 deleted before the bonded relaxation; the counts are recorded per stone.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -52,12 +52,10 @@ class Stone:
     removed_rattlers: int = 0
     removed_outside: int = 0
     force_ratio: float = np.nan      # at the end of the confined relaxation
-    converged_cycle: int = -1        # first check at which the stone's ratio was below the limit
     relax_cycles: int = 0            # confined cycles of its batch
     broken_elements: int = 0         # flat-joint elements broken in the bonded relaxation
     max_bonded_move: float = 0.0     # largest ball displacement in the bonded relaxation [m]
     residual_speed: float = 0.0      # fastest ball at the end of the confined relaxation [m/s]
-    extra: dict = field(default_factory=dict)
 
 
 def prepare(stone, params, rng):
@@ -131,8 +129,8 @@ def force_ratio(sim, ball_stone, n_stones):
 
 
 def _confined(batch, params):
-    """Sub-steps a-c for a batch. Returns (positions, velocities, spins) in batch frame,
-    per-ball stone number in the batch, offsets."""
+    """Sub-steps a-c for a batch. Returns positions and velocities (batch frame), radii,
+    per-ball stone number in the batch, materials, stone offsets."""
     rmax = max(float(s.r.max()) for s in batch)
     walls = [packing.confining_walls(s.poly, 2.0 * rmax) for s in batch]
     off = layout(batch, walls)
@@ -150,24 +148,21 @@ def _confined(batch, params):
         for seg in w:
             sim.add_wall(seg + o)
     cycles = 0
-    done = np.full(len(batch), -1)
     while True:
         sim.run(params.check_every)
         cycles += params.check_every
         ratio = force_ratio(sim, k_of, len(batch))
         below = ratio < params.force_ratio_limit
-        done[below & (done < 0)] = cycles
         if below.all() or cycles >= params.max_relax_cycles:
             break
     for k, s in enumerate(batch):
         s.force_ratio = float(ratio[k])
-        s.converged_cycle = int(done[k])
         s.relax_cycles = cycles
     b = sim.balls           # no public getter for ball state (see report): read-only use
-    return b.pos.copy(), b.vel.copy(), b.omega.copy(), r, k_of, mat, off
+    return b.pos.copy(), b.vel.copy(), r, k_of, mat, off
 
 
-def _bonded(batch, params, pos, vel, omega, r, k_of, mat, off):
+def _bonded(batch, params, pos, vel, r, k_of, mat, off):
     """Sub-step d for a batch: a new wall-free simulation (the engine cannot delete walls)
     from the confined positions (at rest), flat joints installed, rattlers and escaped balls
     deleted, ``bonded_cycles`` cycles."""
@@ -223,21 +218,25 @@ def _bonded(batch, params, pos, vel, omega, r, k_of, mat, off):
         d = np.hypot(*(p[s.bond_j] - p[s.bond_i]).T)
         s.bond_gap = d - s.r[s.bond_i] - s.r[s.bond_j]
         s.broken_elements = int(np.isin(brk["i"], ids).sum())
-        s.max_bonded_move = float(np.hypot(*(b.pos[ids] - pos_before[ids]).T).max()) if len(ids) else 0.0
+        moved = np.hypot(*(b.pos[ids] - pos_before[ids]).T)
+        s.max_bonded_move = float(moved.max()) if len(ids) else 0.0
 
 
-def build_stones(polys, materials, params, seed, progress=None):
+def build_stones(polys, materials, params, seed, ids=None, progress=None):
     """Build one BPM per polygon. ``polys``: convex CCW polygons (m, profile frame),
-    ``materials``: 0 hard / 1 soft. Stone k's throw-in uses its own generator
-    ``default_rng([seed, k])``. Returns a list of ``Stone`` in input order."""
+    ``materials``: 0 hard / 1 soft, ``ids``: the stones' numbers (default 0, 1, ...; the
+    forms-file index), so that a stone's throw-in uses its own generator
+    ``default_rng([seed, id])`` whichever other stones are built. ``progress(n)`` is called
+    after each batch of n stones. Returns a list of ``Stone`` in input order."""
     stones = []
-    for k, (poly, m) in enumerate(zip(polys, materials)):
+    ids = range(len(polys)) if ids is None else ids
+    for k, (poly, m, sid) in enumerate(zip(polys, materials, ids)):
         poly = np.asarray(poly, float)
         area, _ = packing.polygon_area_perimeter(poly)
         if not area > 0:
             raise ValueError(f"stone {k}: profile polygon is not counter-clockwise with area > 0")
         st = Stone(index=k, poly=poly, material=int(m), area=area)
-        stones.append(prepare(st, params, np.random.default_rng([int(seed), k])))
+        stones.append(prepare(st, params, np.random.default_rng([int(seed), int(sid)])))
     groups = batches(stones, params.batch_balls)
     for batch in groups:
         state = _confined(batch, params)

@@ -1,5 +1,6 @@
 """``ballaststudy bpm build FORMS.nc --out BPM.nc``: the CLI stage (registered by cli.py)."""
 
+import sys
 from pathlib import Path
 
 from tqdm import tqdm
@@ -31,6 +32,10 @@ def _bpm_build(args):
     with tqdm(total=n, desc=f"bpm {database}", unit="stone", disable=args.quiet) as bar:
         ds = build_library(args.forms, args.out, params, seed, config_files=(args.config,),
                            progress=bar.update)
+    if ds.attrs["stones_not_converged"]:
+        print(f"ballaststudy: warning: {ds.attrs['stones_not_converged']} stones stopped at "
+              f"max_relax_cycles above the force ratio limit (see force_ratio in {args.out})",
+              file=sys.stderr)
     if not args.quiet:
         print(f"wrote {args.out}: {ds.sizes['stone']} stones, {ds.sizes['ball']} balls, "
               f"{ds.sizes['bond']} bonds, force ratio max {ds.attrs['force_ratio_max']:.2g}")

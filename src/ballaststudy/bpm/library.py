@@ -170,6 +170,9 @@ def to_dataset(forms, index, stones, params, seed, provenance_json):
         "bonded_cycles": params.bonded_cycles,
         "bonds_broken_in_relaxation": int(col("broken_elements").sum()),
         "max_bonded_displacement_m": float(col("max_bonded_move").max()),
+        "residual_speed_max_m_s": float(col("residual_speed").max()),
+        "residual_speed_note": "fastest ball when the confined relaxation stopped; velocities "
+                               "are set to zero when the walls are removed",
         "damping": params.damping,
         "forms_stones": int(forms.sizes["stone"]),
         "max_stones": -1 if params.max_stones is None else int(params.max_stones),
@@ -191,8 +194,11 @@ def build_library(forms_path, out_path, params, seed, config_files=(), progress=
                         params={"bpm": params.as_dict()}, seed=seed)
     index = select_stones(forms, params.max_stones, seed)
     profiles = stone_profiles(forms)
-    stones = build_stones([profiles[i] for i in index], forms.material.values[index], params,
-                          seed, progress)
+    try:
+        stones = build_stones([profiles[i] for i in index], forms.material.values[index],
+                              params, seed, ids=index, progress=progress)
+    except ValueError as err:
+        raise ConfigError(forms_path, "profile", str(err)) from None
     recorder.finish()
     ds = to_dataset(forms, index, stones, params, seed, recorder.json())
     with atomic_path(out_path) as tmp:

@@ -1,7 +1,7 @@
 """BPM-building settings (config section ``bpm``) and the Table 4.2 materials they use."""
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 from ..dem import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial
 from ..dem.materials import F_STR_CO
@@ -64,27 +64,28 @@ def contact_material():
 
 
 def materials_json(params):
-    """The parameters used, per material, as JSON (the ``materials_json`` attribute)."""
+    """The parameters used, per material, as JSON (the ``materials_json`` attribute).
+    Field names are those of ``ballaststudy.dem.FlatJointMaterial`` / ``ContactMaterial``
+    (so ``FlatJointMaterial(**d["hard"]["flat_joint"])`` rebuilds the material; SI units:
+    E [Pa], sigma_c [Pa], c [Pa], phi_deg [deg], the rest dimensionless)."""
     lc = contact_material()
+    fjs = flat_joint_materials()
     out = {}
     for mid, name in enumerate(MATERIAL_NAMES):
-        fj = flat_joint_materials()[mid]
         out[name] = {
             "density_kg_m3": DENSITIES[mid],
-            "flat_joint": {
-                "E_star_Pa": fj.E, "kappa_star": fj.kappa, "sigma_c_Pa": fj.sigma_c,
-                "cohesion_Pa": fj.c, "friction_angle_deg": fj.phi_deg, "mu": fj.mu,
-                "installation_gap_factor": fj.gap_factor, "lambda": fj.lam,
-                "n_elements": 1, "bonded_fraction": 1.0, "gapped_fraction": 0.0,
-                "initial_surface_gap": 0.0},
-            "linear_contact": {"E_star_Pa": lc.E, "kappa_star": lc.kappa, "mu": lc.mu},
-            "packing_contact": {"E_star_Pa": lc.E, "kappa_star": lc.kappa,
-                                "mu": params.packing_friction},
+            "flat_joint": asdict(fjs[mid]),   # E*, kappa*, sigma_c, c, phi, mu, lambda, g_i factor
+            "flat_joint_table_4_2": {"n_elements": 1, "bonded_fraction": 1.0,
+                                     "gapped_fraction": 0.0, "initial_surface_gap": 0.0,
+                                     "radius_multiplier_code": 0},
+            "contact": asdict(lc),                     # LC model: E_n*, kappa_n*, mu_n, dashpots
+            "packing_contact": asdict(replace(lc, mu=params.packing_friction)),
         }
     out["F_str_co"] = F_STR_CO
     out["F_str_co_note"] = (
         "applied exactly as Table 4.2 prints it: hard sigma_c = 3.5 * 5.4e5 Pa, c = 3.5 * 60.0e5 "
         "Pa; the soft entries (3.0e5 Pa, 9.0e5 Pa) are printed without the factor and used as "
         "printed (ballaststudy.dem.FlatJointMaterial)")
+    out["units"] = "SI: E, sigma_c, c in Pa; phi_deg in degrees; density in kg m-3"
     out["source"] = "Wang 2018, Table 4.2 (calibrated parameters)"
     return json.dumps(out, sort_keys=True)
