@@ -111,6 +111,41 @@ def ramp_gravity(rig, g_from, g_to, steps, progress=None):
     return 20 * n
 
 
+def settle(rig, progress=None):
+    """Run until the mean speed of the stone balls is below ``settle_speed_m_s`` (checked
+    every ``settle_check_every`` steps, at most ``settle_max_steps``): a pile that is in
+    equilibrium at a high gravity stays so when the gravity is lowered, while one that
+    is still moving would take very long to settle at 9.81 m/s^2 (local damping)."""
+    p, sim = rig.params, rig.sim
+    steps = 0
+    while steps < p.settle_max_steps:
+        sim.run(p.settle_check_every)
+        steps += p.settle_check_every
+        if progress is not None:
+            progress(p.settle_check_every)
+        ids = rig.stone_balls()
+        if np.mean(np.hypot(*sim.balls.vel[ids].T)) < p.settle_speed_m_s:
+            break
+    return steps
+
+
+def remove_debris(rig):
+    """Delete fragments of fewer than ``min_fragment_balls`` balls that the cuts made out
+    of larger stones (loose single balls would rattle in the voids for a long time)."""
+    p, sim = rig.params, rig.sim
+    if p.min_fragment_balls <= 1:
+        return 0
+    ids = rig.stone_balls()
+    frag = rig.fragments()
+    size = np.bincount(frag[ids])
+    stone_size = np.bincount(sim.balls.stone[ids])
+    small = size[frag[ids]] < p.min_fragment_balls
+    cut = stone_size[sim.balls.stone[ids]] > size[frag[ids]]     # the stone lost balls
+    gone = ids[small & cut]
+    sim.delete_balls(gone)
+    return len(gone)
+
+
 def _stone_means(rig, values):
     """Per-stone mean of a per-ball quantity over live stone balls."""
     b = rig.sim.balls
@@ -143,7 +178,7 @@ def drop(rig, progress=None):
         return state["fell"] and v >= 0.0
 
     sim.run(p.drop_max_steps, callback=watch, every=p.drop_check_every)
-    return state["steps"]
+    return state["steps"] + settle(rig, progress)
 
 
 def tamp(rig, progress=None):
@@ -169,9 +204,11 @@ def tamp(rig, progress=None):
         sim.run(per)
         if progress is not None:
             progress(per)
+    done += settle(rig, progress)
     b = sim.balls
     ids = rig.stone_balls()
     sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.depth_m])
+    remove_debris(rig)
     # plate: a row of overlapping pebbles (radius = half the thickness, spacing = radius)
     rp = 0.5 * p.plate_thickness_m
     n = max(2, int(round((p.plate_width_m - 2 * rp) / rp)) + 1)
@@ -185,8 +222,6 @@ def tamp(rig, progress=None):
                                   material_id=STEEL, mass=m, inertia=inertia))
     lay.plate_balls = list(range(n0, len(sim.balls)))
     sim.set_clump_velocity(lay.plate, vel=(0.0, 0.0), omega=0.0, held=True)
-    done += ramp_gravity(rig, p.tamping_gravity_m_s2, p.gravity_m_s2, p.gravity_ramp_steps,
-                         progress)
     return done + pulses * per
 
 
@@ -199,11 +234,12 @@ def move_side_walls(rig, progress=None):
     w2 = 0.5 * p.width_m
     out = (b.pos[ids, 0] - b.rad[ids] < -w2) | (b.pos[ids, 0] + b.rad[ids] > w2)
     sim.delete_balls(ids[out])
+    remove_debris(rig)
     steps = 0
     for _ in range(200):
         xl = sim.walls.seg[lay.left[0], 0]
         xr = sim.walls.seg[lay.right[0], 0]
-        gap = max(-w2 - xl, xr - w2)
+        gap = max(abs(-w2 - xl), abs(xr - w2))
         if gap < 1e-9:
             break
         dt = sim.dt if sim.dt > 0 else 1e-6
@@ -238,7 +274,7 @@ def settle_plate(rig, progress=None):
         gap = bottom - top
         f, _ = sim.clump_force(c)
         carried = f[1] - m * sim.prm[GY]
-        if carried >= m * p.gravity_m_s2:
+        if carried >= m * p.gravity_m_s2:      # in contact (its weight at 9.81 m/s^2)
             break
         dt = sim.dt if sim.dt > 0 else 1e-6
         if gap > p.plate_approach_gap_m:
@@ -273,8 +309,12 @@ def relax(rig, progress=None):
     of two in the default config, so this is exact), plate released, loading ball resting
     on it, ``relax_steps`` steps with normal gravity and loading damping."""
     p, sim, lay = rig.params, rig.sim, rig.layout
+    # ramp to normal gravity with the plate and loading ball on (strengthened bonds, drop
+    # damping), then bonds back to their strength and loading damping
+    ramped = ramp_gravity(rig, p.tamping_gravity_m_s2, p.gravity_m_s2, p.gravity_ramp_steps,
+                          progress)
     sim.scale_bond_strength(1.0 / p.drop_bond_factor)
-    sim.set_damping(p.damping)
+    sim.set_damping(p.damping, clump_alpha=p.damping)
     sim.set_clump_velocity(lay.plate, held=False)
     chunk = max(1, p.relax_steps // 20)
     done = 0
@@ -284,7 +324,7 @@ def relax(rig, progress=None):
         done += k
         if progress is not None:
             progress(k)
-    return p.relax_steps
+    return p.relax_steps + ramped
 
 
 def assemble(lib, params, seed, progress=None):

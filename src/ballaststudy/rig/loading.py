@@ -62,7 +62,8 @@ class LoadingRun:
                       windows=0, direction=-1, cycle=0, f_prev=0.0, y_prev=0.0,
                       cyc_start=0, fmax=-1e300, fmin=1e300, y30=float("nan"),
                       peak=None, log0=int(rig.sim.log.n[0]), step0=rig.sim.step,
-                      static_end_step=-1, y_ref=float("nan"), static_mean=[])
+                      static_end_step=-1, y_ref=float("nan"), static_mean=[],
+                      static_walls=[], win_bottom=0.0, win_side=0.0)
         self.samples = {k: [] for k in ("step", "cycle", "force", "y")}
         self.cyc = {k: [] for k in CYCLE_FIELDS}
         self.bottom = []     # (cycle, segment) at peak
@@ -106,16 +107,21 @@ class LoadingRun:
     def _static(self, f, y):
         p, s = self.rig.params, self.s
         s["win_sum"] += f
+        s["win_bottom"] += float(self.rig.bottom_forces().sum())
+        s["win_side"] += float(-self.rig.side_forces()[:, 1].sum())
         s["win_n"] += 1
         s["win_steps"] += p.control_every
         if s["win_steps"] < p.static_window_steps:
             return
         target = p.static_loads_kN[s["target"]] * KN
         mean = s["win_sum"] / s["win_n"]
+        walls = (s["win_bottom"] / s["win_n"], s["win_side"] / s["win_n"])
         s["win_sum"], s["win_n"], s["win_steps"] = 0.0, 0, 0
+        s["win_bottom"], s["win_side"] = 0.0, 0.0
         s["windows"] += 1
         if abs(mean - target) / target < p.static_tolerance:
             s["static_mean"].append(mean)
+            s["static_walls"].append(walls)     # mean bottom, side-wall vertical force
             s["target"] += 1
             s["windows"] = 0
             if s["target"] == len(p.static_loads_kN):

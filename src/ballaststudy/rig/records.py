@@ -143,6 +143,7 @@ def to_dataset(run, attrs=None):
         "database": lay.database, "seed": lay.seed, "cycles_requested": run.cycles,
         "y_reference": s["y_ref"], "static_end_step": s["static_end_step"],
         "static_mean_forces_N": json.dumps(s["static_mean"]),
+        "static_mean_wall_forces_N": json.dumps(s["static_walls"]),
         "flat_joint_elements_installed": n_bonds,
         "thickness_m": float(rig.sim.prm[THICK]),
         "force_convention": "2D forces per thickness t (PFC2D); thesis loads applied directly",
