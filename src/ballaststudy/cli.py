@@ -14,6 +14,8 @@ from .forms.evaluate import MeshError, evaluate_stl
 from .forms.generator import GenerationError
 from .forms.objective import ObjectiveError
 from .forms.validate import SUMMARY_COLUMNS, validation_row
+from .bpm.cli import register as register_bpm
+from .rig.cli import register as register_case
 from .study.cli import register as register_study
 
 
@@ -137,6 +139,8 @@ def build_parser():
     vf.add_argument("--results", default="results")
     vf.set_defaults(func=_provenance_verify)
 
+    register_bpm(sub)
+    register_case(sub)
     register_study(sub)
 
     c = sub.add_parser("config", help="configuration")
