@@ -1,0 +1,48 @@
+# Stage 4: the study (thesis ch. 5): per-case metrics -> study.nc -> IRI tables and the
+# optimisation report with the thesis' findings checked.
+
+
+rule study_aggregate:
+    input:
+        metrics=expand(f"{RESULTS}/cases/{{db}}/case{{case}}/metrics.nc", db=NAMES, case=CASES),
+        forms=expand(f"{RESULTS}/forms/{{db}}.nc", db=NAMES),
+    output:
+        report(f"{RESULTS}/study.nc", caption="../report/study.rst", category="Study"),
+    log:
+        f"{RESULTS}/logs/study/aggregate.log",
+    shell:
+        "ballaststudy study aggregate {input.metrics} --forms {input.forms} --out {output} > {log} 2>&1"
+
+
+rule study_iri:
+    input:
+        f"{RESULTS}/study.nc",
+    output:
+        csv=f"{RESULTS}/study/iri/iri.csv",
+        md=f"{RESULTS}/study/iri/iri.md",
+        heatmap=report(f"{RESULTS}/study/iri/iri_heatmap.png", caption="../report/iri.rst", category="Study"),
+    params:
+        resamples=config["study"]["bootstrap_resamples"],
+        seed=config["study"]["bootstrap_seed"],
+    log:
+        f"{RESULTS}/logs/study/iri.log",
+    shell:
+        "ballaststudy study iri {input} --out {RESULTS}/study/iri --resamples {params.resamples} "
+        "--seed {params.seed} > {log} 2>&1"
+
+
+rule study_optimise:
+    input:
+        f"{RESULTS}/study.nc",
+    output:
+        md=report(f"{RESULTS}/study/report/report.md", caption="../report/optimise.rst", category="Study"),
+        ranking=f"{RESULTS}/study/report/ranking.csv",
+        findings=f"{RESULTS}/study/report/findings.csv",
+    params:
+        resamples=config["study"]["bootstrap_resamples"],
+        seed=config["study"]["bootstrap_seed"],
+    log:
+        f"{RESULTS}/logs/study/optimise.log",
+    shell:
+        "ballaststudy study optimise {input} --out {RESULTS}/study/report --resamples {params.resamples} "
+        "--seed {params.seed} > {log} 2>&1"
