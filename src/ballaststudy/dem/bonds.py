@@ -62,7 +62,7 @@ def _strip_sq(gc, th, a, b, compressed_only):
 
 
 @njit(cache=True)
-def bond_forces(prm, step, pos, vel, omega, rad, stone, force, moment,
+def bond_forces(prm, step, pos, vel, omega, rad, stone, fa,
                 b_i, b_j, b_active, rbar, d0, gi, kn, ks, sigc, coh, tanphi, bmu,
                 theta, bmom, state, bfn, bfs,
                 l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
@@ -160,12 +160,12 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, force, moment,
         bmom[b] = mc
         fx = -ftot_n * nx + ftot_s * tx          # force on j (tension pulls j to i)
         fy = -ftot_n * ny + ftot_s * ty
-        force[j, 0] += fx
-        force[j, 1] += fy
-        force[i, 0] -= fx
-        force[i, 1] -= fy
-        moment[j] += mc - aj * ftot_s
-        moment[i] += -mc - ai * ftot_s
+        fa[j, 0] += fx
+        fa[j, 1] += fy
+        fa[i, 0] -= fx
+        fa[i, 1] -= fy
+        fa[j, 2] += mc - aj * ftot_s
+        fa[i, 2] += -mc - ai * ftot_s
 
 
 @njit(cache=True)

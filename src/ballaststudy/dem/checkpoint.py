@@ -17,6 +17,7 @@ _PARTS = (("balls", Balls, "b_"), ("walls", Walls, "w_"), ("clumps", Clumps, "c_
           ("log", BreakLog, "l_"))
 _ARRAYS = ("prm", "cnt", "eacc", "err", "lc")
 _META = ("skin", "domain", "n_elements", "_prepared")
+FORMAT = 1      # bump when the saved arrays change
 
 
 def save_state(path, sim):
@@ -26,6 +27,7 @@ def save_state(path, sim):
     for name in _ARRAYS:
         data["s_" + name] = getattr(sim, name)
     meta = {k: getattr(sim, k) for k in _META}
+    meta["format"] = FORMAT
     meta["lc_default"] = list(vars(sim._lc_default).values())  # dataclass fields in order
     data["meta"] = np.array(json.dumps(meta))
     d = os.path.dirname(os.path.abspath(path))
@@ -46,11 +48,14 @@ def load_state(path, sim):
     from .materials import ContactMaterial
     with np.load(path) as z:
         d = {k: z[k] for k in z.files}
+    meta = json.loads(str(d["meta"]))
+    if meta.get("format") != FORMAT:
+        raise ValueError(f"{path}: checkpoint format {meta.get('format')} is not {FORMAT} "
+                         "(written by another version of ballaststudy.dem)")
     for attr, cls, prefix in _PARTS:
         setattr(sim, attr, cls.from_dict(d, prefix))
     for name in _ARRAYS:
         setattr(sim, name, np.array(d["s_" + name]))
-    meta = json.loads(str(d["meta"]))
     for k in _META:
         v = meta[k]
         setattr(sim, k, tuple(v) if isinstance(v, list) else v)

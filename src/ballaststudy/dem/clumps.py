@@ -41,7 +41,7 @@ def place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, cth
 
 
 @njit(cache=True)
-def gather_clumps(gx, gy, pos, force, moment, clump, alive, cpos, cmass, cforce, cmoment):
+def gather_clumps(gx, gy, pos, fa, clump, alive, cpos, cmass, cforce, cmoment):
     """Clump force = weight + sum of pebble forces; moment about the centre of mass."""
     for c in range(cpos.shape[0]):
         cforce[c, 0] = cmass[c] * gx
@@ -51,7 +51,7 @@ def gather_clumps(gx, gy, pos, force, moment, clump, alive, cpos, cmass, cforce,
         c = clump[i]
         if c < 0 or not alive[i]:
             continue
-        cforce[c, 0] += force[i, 0]
-        cforce[c, 1] += force[i, 1]
-        cmoment[c] += moment[i] + (pos[i, 0] - cpos[c, 0]) * force[i, 1] \
-            - (pos[i, 1] - cpos[c, 1]) * force[i, 0]
+        cforce[c, 0] += fa[i, 0]
+        cforce[c, 1] += fa[i, 1]
+        cmoment[c] += fa[i, 2] + (pos[i, 0] - cpos[c, 0]) * fa[i, 1] \
+            - (pos[i, 1] - cpos[c, 1]) * fa[i, 0]

@@ -97,20 +97,20 @@ def pack_kinematics(pos, vel, omega, rad, minv, mat, kin):
 
 
 @njit(cache=True)
-def pair_forces(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
+def pair_forces(prm, kin, fa, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
                 b_active, lc, eacc):
     """Add ball-ball contact forces of the Verlet list to force/moment (kin: see
     ``pack_kinematics``)."""
     if int(prm[P.LAW]) == P.LAW_HOOKE:
-        _pairs_hooke(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
+        _pairs_hooke(prm, kin, fa, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
                      b_active)
     else:
-        _pairs_pfc(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
+        _pairs_pfc(prm, kin, fa, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair,
                    b_active, lc, eacc)
 
 
 @njit(cache=True, fastmath=FAST)
-def _pairs_hooke(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair, b_active):
+def _pairs_hooke(prm, kin, fa, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair, b_active):
     dt = prm[P.DT]
     kn = prm[P.H_KN]
     kt = prm[P.H_KT]
@@ -152,18 +152,18 @@ def _pairs_hooke(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npa
         ft = fsy * nx - fsx * ny
         fx = fn * nx + fsx
         fy = fn * ny + fsy
-        force[j, 0] += fx
-        force[j, 1] += fy
-        force[i, 0] -= fx
-        force[i, 1] -= fy
-        moment[j] -= rj * ft
-        moment[i] -= ri * ft
+        fa[j, 0] += fx
+        fa[j, 1] += fy
+        fa[i, 0] -= fx
+        fa[i, 1] -= fy
+        fa[j, 2] -= rj * ft
+        fa[i, 2] -= ri * ft
         p_fn[p] = fn
         p_fs[p] = ft
 
 
 @njit(cache=True)
-def _pairs_pfc(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair, b_active,
+def _pairs_pfc(prm, kin, fa, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair, b_active,
                lc, eacc):
     dt = prm[P.DT]
     thick = prm[P.THICK]
@@ -212,12 +212,12 @@ def _pairs_pfc(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, npair
         ef += e2
         fx = fn * nx + ft * tx
         fy = fn * ny + ft * ty
-        force[j, 0] += fx
-        force[j, 1] += fy
-        force[i, 0] -= fx
-        force[i, 1] -= fy
-        moment[j] -= aj * ft
-        moment[i] -= ai * ft
+        fa[j, 0] += fx
+        fa[j, 1] += fy
+        fa[i, 0] -= fx
+        fa[i, 1] -= fy
+        fa[j, 2] -= aj * ft
+        fa[i, 2] -= ai * ft
         p_fn[p] = fn
         p_fs[p] = ft
     eacc[P.E_DASHPOT] += ed

@@ -35,16 +35,23 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
     p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)."""
     skin = prm[P.SKIN]
     kin = np.empty((pos.shape[0], 8))
+    # one accumulator row (fx, fy, mz) per ball: a single cache line per scattered update;
+    # the public force/moment arrays are written back when the chunk ends
+    fa = np.zeros((pos.shape[0], 4))
+    for i in range(pos.shape[0]):
+        fa[i, 0] = force[i, 0]
+        fa[i, 1] = force[i, 1]
+        fa[i, 2] = moment[i]
     for k in range(nsteps):
         dt = prm[P.DT]
         dt_next = dt
-        d1, d2 = first_half(dt, prm[P.GX], prm[P.GY], pos, vel, omega, force, moment, mass,
+        d1, d2 = first_half(dt, prm[P.GX], prm[P.GY], pos, vel, omega, fa, mass,
                             fext, minv, iinv, rad, mat, fix, clump, alive, pos0, kin,
                             cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia,
                             cheld)
         if cpos.shape[0] > 0:
             place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
-            d1, d2 = pebbles_moved(pos, vel, omega, force, moment, fext, minv, rad, mat, clump,
+            d1, d2 = pebbles_moved(pos, vel, omega, fa, fext, minv, rad, mat, clump,
                                    alive, pos0, kin, d1, d2)
         prm[P.WALL_TRAVEL] += move_walls(seg, wvel, womega, centre, dt)   # wall travel since build
         d1 = d1 ** 0.5
@@ -82,26 +89,36 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
                     dt_next = prm[P.DT_SAFETY] * dtc   # applies from the next step
         cnt[0] += 1
         prm[P.TIME] += dt
-        pair_forces(prm, kin, force, moment, p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n[0],
+        pair_forces(prm, kin, fa, p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n[0],
                     b_active, lc, eacc)
         if b_i.shape[0] > 0:
-            bond_forces(prm, cnt[0], pos, vel, omega, rad, stone, force, moment,
+            bond_forces(prm, cnt[0], pos, vel, omega, rad, stone, fa,
                         b_i, b_j, b_active, rbar, d0, gi, bkn, bks, sigc, coh, tanphi, bmu,
                         theta, bmom, state, bfn, bfs,
                         l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
                         l_stress, l_n, eacc)
-        wall_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
+        wall_forces(prm, pos, vel, omega, rad, minv, mat, fa,
                     seg, wvel, womega, centre, wmat, link, wforce, wmoment,
                     w_i, w_s, w_h, w_fn, w_fs, w_n[0], lc, eacc)
         if cpos.shape[0] > 0:
-            gather_clumps(prm[P.GX], prm[P.GY], pos, force, moment, clump, alive, cpos, cmass,
+            gather_clumps(prm[P.GX], prm[P.GY], pos, fa, clump, alive, cpos, cmass,
                           cforce, cmoment)
-        st = second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive,
+        st = second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive,
                          damp, cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp,
                          eacc, err)
         if cpos.shape[0] > 0:
             place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
         prm[P.DT] = dt_next
         if st != P.OK:
+            _write_back(fa, force, moment)
             return (st, k + 1, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)
+    _write_back(fa, force, moment)
     return (P.OK, nsteps, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)
+
+
+@njit(cache=True)
+def _write_back(fa, force, moment):
+    for i in range(force.shape[0]):
+        force[i, 0] = fa[i, 0]
+        force[i, 1] = fa[i, 1]
+        moment[i] = fa[i, 2]

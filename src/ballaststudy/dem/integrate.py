@@ -16,7 +16,7 @@ from .contacts import LC_E, LC_KAPPA
 
 
 @njit(cache=True)
-def first_half(dt, gx, gy, pos, vel, omega, force, moment, mass, fext, minv, iinv, rad, mat,
+def first_half(dt, gx, gy, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat,
                fix, clump, alive, pos0, kin, cpos, cvel, comega, ctheta, cforce, cmoment,
                cmass, cinertia, cheld):
     """One pass per free ball: half kick (held dofs keep their velocity), drift, the
@@ -31,17 +31,17 @@ def first_half(dt, gx, gy, pos, vel, omega, force, moment, mass, fext, minv, iin
         if clump[i] >= 0:
             continue
         if not alive[i]:
-            force[i, 0] = 0.0
-            force[i, 1] = 0.0
-            moment[i] = 0.0
+            fa[i, 0] = 0.0
+            fa[i, 1] = 0.0
+            fa[i, 2] = 0.0
             continue
         f = fix[i]
         if not (f & 1):
-            vel[i, 0] += h * force[i, 0] * minv[i]
+            vel[i, 0] += h * fa[i, 0] * minv[i]
         if not (f & 2):
-            vel[i, 1] += h * force[i, 1] * minv[i]
+            vel[i, 1] += h * fa[i, 1] * minv[i]
         if not (f & 4):
-            omega[i] += h * moment[i] * iinv[i]
+            omega[i] += h * fa[i, 2] * iinv[i]
         x = pos[i, 0] + dt * vel[i, 0]
         y = pos[i, 1] + dt * vel[i, 1]
         pos[i, 0] = x
@@ -55,9 +55,9 @@ def first_half(dt, gx, gy, pos, vel, omega, force, moment, mass, fext, minv, iin
                 d1 = dd
             else:
                 d2 = dd
-        force[i, 0] = mass[i] * gx + fext[i, 0]
-        force[i, 1] = mass[i] * gy + fext[i, 1]
-        moment[i] = 0.0
+        fa[i, 0] = mass[i] * gx + fext[i, 0]
+        fa[i, 1] = mass[i] * gy + fext[i, 1]
+        fa[i, 2] = 0.0
         kin[i, 0] = x
         kin[i, 1] = y
         kin[i, 2] = vel[i, 0]
@@ -78,7 +78,7 @@ def first_half(dt, gx, gy, pos, vel, omega, force, moment, mass, fext, minv, iin
 
 
 @njit(cache=True)
-def pebbles_moved(pos, vel, omega, force, moment, fext, minv, rad, mat, clump, alive, pos0,
+def pebbles_moved(pos, vel, omega, fa, fext, minv, rad, mat, clump, alive, pos0,
                   kin, d1, d2):
     """After ``place_pebbles``: displacement, force reset (external load only: the clump
     carries the weight) and packed rows for pebbles. Returns the updated top-2."""
@@ -94,9 +94,9 @@ def pebbles_moved(pos, vel, omega, force, moment, fext, minv, rad, mat, clump, a
                 d1 = dd
             else:
                 d2 = dd
-        force[i, 0] = fext[i, 0]
-        force[i, 1] = fext[i, 1]
-        moment[i] = 0.0
+        fa[i, 0] = fext[i, 0]
+        fa[i, 1] = fext[i, 1]
+        fa[i, 2] = 0.0
         kin[i, 0] = pos[i, 0]
         kin[i, 1] = pos[i, 1]
         kin[i, 2] = vel[i, 0]
@@ -135,7 +135,7 @@ def _damped(f, v, alpha):
 
 
 @njit(cache=True)
-def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, alive, damp,
+def second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive, damp,
                 cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp, eacc, err):
     """Local damping (per body: ``damp``, ``cdamp``; not on velocity-held dofs) + half
     kick; then the guards. Returns a status code and puts the offending ball id and
@@ -156,23 +156,23 @@ def second_half(prm, pos, vel, omega, force, moment, minv, iinv, fix, clump, ali
         alpha = damp[i]
         if alpha > 0.0:
             if not (f & 1):
-                fx = _damped(force[i, 0], vel[i, 0], alpha)
-                el -= (fx - force[i, 0]) * vel[i, 0] * dt
-                force[i, 0] = fx
+                fx = _damped(fa[i, 0], vel[i, 0], alpha)
+                el -= (fx - fa[i, 0]) * vel[i, 0] * dt
+                fa[i, 0] = fx
             if not (f & 2):
-                fy = _damped(force[i, 1], vel[i, 1], alpha)
-                el -= (fy - force[i, 1]) * vel[i, 1] * dt
-                force[i, 1] = fy
+                fy = _damped(fa[i, 1], vel[i, 1], alpha)
+                el -= (fy - fa[i, 1]) * vel[i, 1] * dt
+                fa[i, 1] = fy
             if not (f & 4):
-                mz = _damped(moment[i], omega[i], alpha)
-                el -= (mz - moment[i]) * omega[i] * dt
-                moment[i] = mz
+                mz = _damped(fa[i, 2], omega[i], alpha)
+                el -= (mz - fa[i, 2]) * omega[i] * dt
+                fa[i, 2] = mz
         if not (f & 1):
-            vel[i, 0] += h * force[i, 0] * minv[i]
+            vel[i, 0] += h * fa[i, 0] * minv[i]
         if not (f & 2):
-            vel[i, 1] += h * force[i, 1] * minv[i]
+            vel[i, 1] += h * fa[i, 1] * minv[i]
         if not (f & 4):
-            omega[i] += h * moment[i] * iinv[i]
+            omega[i] += h * fa[i, 2] * iinv[i]
         # guard pre-check, branch free; NaN fails every comparison
         x = pos[i, 0]
         y = pos[i, 1]

@@ -219,9 +219,10 @@ class Simulation:
         """Flat joints between balls of one stone whose gap < g_i (per ``materials``:
         a FlatJointMaterial for all, or {material_id: FlatJointMaterial}, the material
         of ball i). Initial gap g_0 = 0: the current distance is the bonded state.
-        Returns the number of bonds installed."""
+        Balls of clumps are never bonded. Returns the number of bonds installed.
+        Defaults of FlatJointMaterial: thesis Table 4.2 (hard rock)."""
         b = self.balls
-        alive = b.alive.copy()
+        alive = (b.alive & (b.clump < 0)).astype(np.uint8)    # never inside a rigid clump
         if balls is not None:
             mask = np.zeros_like(alive)
             mask[balls] = 1
@@ -235,8 +236,7 @@ class Simulation:
                              < m.gap_factor * min(b.rad[ii], b.rad[jj])
                              for ii, jj, m in zip(i, j, mats)], bool)
             i, j, mats = i[keep], j[keep], [m for m, k in zip(mats, keep) if k]
-        self._append_bonds(i, j, mats)
-        return len(i)
+        return self._append_bonds(i, j, mats)
 
     def _append_bonds(self, i, j, mats):
         b, bd, ne, t = self.balls, self.bonds, self.n_elements, self.prm[P.THICK]
@@ -261,11 +261,14 @@ class Simulation:
             new = {k: v[keep] for k, v in new.items()}
         for k, v in new.items():
             setattr(bd, k, np.concatenate([getattr(bd, k), v]))
-        order = np.lexsort((bd.j, bd.i))     # kernels need (i, j) order for the lookup
+        # kernels need (i, j) order for the lookup; bond indices of earlier installs shift
+        # (the breakage log also records the ball ids i, j)
+        order = np.lexsort((bd.j, bd.i))
         for k in new:
             setattr(bd, k, getattr(bd, k)[order])
         self.log.ensure(bd.state.size)
         self._touch()
+        return len(new["i"])
 
     # ------------------------------------------------------------------ changing
     def delete_balls(self, ids):

@@ -51,7 +51,7 @@ def _joint_elsewhere(px, py, seg, link, s, u):
 
 
 @njit(cache=True)
-def wall_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
+def wall_forces(prm, pos, vel, omega, rad, minv, mat, fa,
                 seg, wvel, womega, centre, wmat, link, wforce, wmoment,
                 w_i, w_s, w_h, w_fn, w_fs, nwp, lc, eacc):
     """Add ball-segment forces to the balls; record force and moment on each segment."""
@@ -113,9 +113,9 @@ def wall_forces(prm, pos, vel, omega, rad, minv, mat, force, moment,
             ef += e2
         fx = fn * nx + fsx
         fy = fn * ny + fsy
-        force[i, 0] += fx
-        force[i, 1] += fy
-        moment[i] -= arm * ft
+        fa[i, 0] += fx
+        fa[i, 1] += fy
+        fa[i, 2] -= arm * ft
         wforce[s, 0] -= fx
         wforce[s, 1] -= fy
         wmoment[s] -= (cx - centre[s, 0]) * fy - (cy - centre[s, 1]) * fx
