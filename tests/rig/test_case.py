@@ -69,9 +69,14 @@ def test_cycles_recorded(full_run, small_params):
     # breakage counts = breakage records
     mode, cyc = ds["breakage_mode_code"].values, ds["breakage_cycle"].values
     for c in range(CYCLES):
-        assert ds["broken_tension"][c] == np.sum((mode == 1) & (cyc <= c))
-        assert ds["broken_shear"][c] == np.sum((mode == 2) & (cyc <= c))
-    assert "settlement" in ds and ds["settlement"].attrs["units"] == "m"
+        for name in ("elements_broken_tension", "broken_tension"):
+            assert ds[name][c] == np.sum((mode == 1) & (cyc <= c)), name
+        for name in ("elements_broken_shear", "broken_shear"):
+            assert ds[name][c] == np.sum((mode == 2) & (cyc <= c)), name
+    assert ds.attrs["metrics_package"].startswith("ballaststudy.metrics")
+    for name in ("settlement", "breakage_rate", "fpa", "void_ratio", "ghost_particles"):
+        assert name in ds and "units" in ds[name].attrs, name
+    assert np.all(np.isfinite(ds["fpa"])) and np.all((ds["void_ratio"] > 0) & (ds["void_ratio"] < 1))
 
 
 def test_resume_is_identical(full_run, assembled, tmp_path):

@@ -61,7 +61,7 @@ def _case_run(args):
         rig = BoxRig.load(args.assembled)
         rig.params = params
         run = LoadingRun(rig, args.cycles, checkpoint=ckpt,
-                         checkpoint_every=args.checkpoint_every)
+                         checkpoint_every=args.checkpoint_every, metrics=cfg.get("metrics"))
     vtk_dir = None if args.no_vtk else out.with_name("vtk")
     if vtk_dir is not None:
         from .vtk import vtk_hook

@@ -43,8 +43,8 @@ CYCLE_FIELDS = {
     "plate_x": ("m", "plate centre x at the end of the cycle"),
     "plate_y": ("m", "plate centre y at the end of the cycle"),
     "plate_angle": ("rad", "plate rotation at the end of the cycle"),
-    "broken_tension": ("1", "flat-joint elements broken in tension since loading began"),
-    "broken_shear": ("1", "flat-joint elements broken in shear since loading began"),
+    "elements_broken_tension": ("1", "flat-joint elements broken in tension since loading began"),
+    "elements_broken_shear": ("1", "flat-joint elements broken in shear since loading began"),
     "contacts": ("1", "contacts carrying force at peak load"),
 }
 
@@ -52,7 +52,9 @@ CYCLE_FIELDS = {
 class LoadingRun:
     """The loading state machine of one case. ``advance()`` = one control step."""
 
-    def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None):
+    def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None):
+        """``metrics``: the config's ``metrics:`` section (dict) for the behaviours computed
+        at the end of every cycle by ``ballaststudy.metrics`` (None = its defaults)."""
         p = rig.params
         self.rig = rig
         self.cycles = int(cycles)
@@ -63,7 +65,9 @@ class LoadingRun:
                       cyc_start=0, fmax=-1e300, fmin=1e300, y30=float("nan"),
                       peak=None, log0=int(rig.sim.log.n[0]), step0=rig.sim.step,
                       static_end_step=-1, y_ref=float("nan"), static_mean=[],
-                      static_walls=[], win_bottom=0.0, win_side=0.0)
+                      static_walls=[], win_bottom=0.0, win_side=0.0, cyc_sample0=0,
+                      metrics_cfg=dict(metrics or {}), rows=[],
+                      n_bonds0=int((rig.sim.bonds.active == 1).sum()))
         self.samples = {k: [] for k in ("step", "cycle", "force", "y")}
         self.cyc = {k: [] for k in CYCLE_FIELDS}
         self.bottom = []     # (cycle, segment) at peak
@@ -142,6 +146,7 @@ class LoadingRun:
         s = self.s
         s["direction"] = -1
         s["cyc_start"] = self.rig.sim.step
+        s["cyc_sample0"] = len(self.samples["step"])
         s["fmax"], s["fmin"], s["y30"], s["peak"] = -1e300, 1e300, float("nan"), None
 
     def _cyclic(self, f, y):
@@ -191,10 +196,11 @@ class LoadingRun:
                    force_max=s["fmax"], force_min=s["fmin"], y_at_settlement_force=s["y30"],
                    y_at_peak=pk["y"], y_at_end=y, plate_x_at_peak=pk["px"],
                    plate_y_at_peak=pk["py"], plate_angle_at_peak=pk["pa"], plate_x=px,
-                   plate_y=py, plate_angle=pa, broken_tension=int((modes == 1).sum()),
-                   broken_shear=int((modes == 2).sum()), contacts=pk["contacts"])
+                   plate_y=py, plate_angle=pa, elements_broken_tension=int((modes == 1).sum()),
+                   elements_broken_shear=int((modes == 2).sum()), contacts=pk["contacts"])
         for k, v in row.items():
             self.cyc[k].append(v)
+        s["rows"].append(self.behaviours())
         c = s["cycle"]
         for hook in self.hooks:
             hook(self, c)
@@ -204,6 +210,66 @@ class LoadingRun:
         if self.checkpoint and (s["cycle"] % self.checkpoint_every == 0
                                 or s["phase"] == "done"):
             self._ckpt_due = True      # saved once this control step is complete
+
+    # --------------------------------------------------------------- behaviours
+    def snapshot(self):
+        """The end-of-cycle snapshot ``ballaststudy.metrics.compute_cycle`` reads
+        (bottom forces from the cycle's peak load, where the force propagates)."""
+        rig, s, lay = self.rig, self.s, self.rig.layout
+        sim = rig.sim
+        b, bd = sim.balls, sim.bonds
+        n = len(b)
+        ballast = np.zeros(n, bool)
+        ballast[: lay.n_stone_balls] = b.alive[: lay.n_stone_balls] == 1
+        cl = sim.contact_list()
+        ball = cl["j"] >= 0
+        i, j = cl["i"][ball], cl["j"][ball]
+        d = b.pos[j] - b.pos[i]
+        nrm = d / np.hypot(*d.T)[:, None]
+        fn = np.abs(cl["fx"][ball] * nrm[:, 0] + cl["fy"][ball] * nrm[:, 1])
+        container = set(lay.bottom) | set(lay.left) | set(lay.right)
+        wall = ~ball
+        touch = np.zeros(n, bool)
+        seg = -1 - cl["j"][wall]
+        touch[cl["i"][wall][np.isin(seg, list(container))]] = True
+        bottom_seg = sim.walls.seg[lay.bottom]
+        px, py, _ = rig.plate_state()
+        p = rig.params
+        k0 = s["cyc_sample0"]
+        br = sim.log
+        nlog = int(br.n[0])
+        return dict(
+            pos=b.pos.copy(), rad=b.rad.copy(), ballast=ballast,
+            bond_i=bd.i, bond_j=bd.j,
+            bond_intact=(bd.active == 1) & (bd.state.max(axis=1) == 1),
+            contact_i=i, contact_j=j, contact_fn=fn, ball_touches_container=touch,
+            geometry=dict(container_x_min=float(sim.walls.seg[lay.left_low, 0]),
+                          container_x_max=float(sim.walls.seg[lay.right_low, 0]),
+                          container_y_bottom=float(bottom_seg[:, 1].mean()),
+                          plate_x_mid=px, plate_bottom_y=py - 0.5 * p.plate_thickness_m,
+                          plate_half_width=0.5 * p.plate_width_m),
+            bottom_force=np.asarray(self.bottom[-1]) if self.bottom else rig.bottom_forces(),
+            bottom_x_centre=0.5 * (bottom_seg[:, 0] + bottom_seg[:, 2]),
+            bottom_width=np.abs(bottom_seg[:, 2] - bottom_seg[:, 0]),
+            load_y=np.asarray(self.samples["y"][k0:]),
+            load_force=np.asarray(self.samples["force"][k0:]),
+            break_step=br.step[s["log0"]:nlog].copy(), break_mode=br.mode[s["log0"]:nlog].copy(),
+            n_bonds_installed=int(s["n_bonds0"]), n_elements_per_bond=int(bd.state.shape[1]),
+            cycle_start_step=int(s["cyc_start"]), cycle_end_step=int(sim.step) + 1)
+
+    def behaviours(self):
+        """This cycle's behaviours from ``ballaststudy.metrics`` (JSON-safe dict; {} when
+        the package is not installed)."""
+        try:
+            from ..metrics import MetricsParams, compute_cycle
+        except ImportError:
+            return {}
+        rows = self.s["rows"]
+        ref = rows[0].get("y_at_level") if rows else None
+        out = compute_cycle(self.snapshot(), MetricsParams.from_config(self.s["metrics_cfg"]),
+                            y_reference=ref)
+        return {k: (float(v) if isinstance(v, (float, np.floating)) else int(v))
+                for k, v in out.items()}
 
     # --------------------------------------------------------------- driving
     def run(self, progress=None, stop_after=None):
@@ -251,6 +317,7 @@ class LoadingRun:
 
     @classmethod
     def from_checkpoint(cls, path, cycles=None, checkpoint_every=None):
+        """The run saved in ``path`` (its metrics settings come with it)."""
         from .box import RigLayout
         from .params import RigParams
         with np.load(path, allow_pickle=False) as z:

@@ -54,8 +54,8 @@ def plot_behaviours(ds, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    names = [n for n in ("settlement", "BR", "BR_T", "BR_S", "force_propagation_angle",
-                         "FPA_mean", "void_ratio", "ghost_particles") if n in ds]
+    names = [n for n in ("settlement", "breakage_rate", "breakage_rate_tension",
+                         "breakage_rate_shear", "fpa", "void_ratio", "ghost_particles") if n in ds]
     fig, axes = plt.subplots(len(names), 1, figsize=(6, 1.9 * len(names)), sharex=True, dpi=110)
     axes = np.atleast_1d(axes)
     for ax, n in zip(axes, names):

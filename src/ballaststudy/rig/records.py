@@ -34,29 +34,30 @@ def breakage_records(run):
     return out
 
 
-def behaviours(ds, n_bonds):
-    """Settlement and breakage rates from the records (always) and the metrics package's
-    behaviours (when it is installed). Returns a dict name -> DataArray."""
+def behaviours(run, ds, n_elements):
+    """The behaviours per cycle: ``ballaststudy.metrics`` results computed at the end of
+    every cycle (``LoadingRun.behaviours``) when that package is installed; otherwise
+    settlement and breakage rates straight from the records (eqs. 4.6-4.8)."""
+    rows = run.s["rows"]
+    if rows and all(rows):
+        from ..metrics import metrics_dataset
+        ds.attrs["metrics_package"] = "ballaststudy.metrics (compute_cycle per cycle)"
+        return {k: v for k, v in metrics_dataset(rows).data_vars.items()}
+    ds.attrs["metrics_package"] = ("not installed: settlement and breakage rates from the "
+                                   "rig's records only")
     out = {}
-    y30 = ds["y_at_settlement_force"]
-    ref = ds.attrs["y_reference"]
     out["settlement"] = xr.DataArray(
-        ref - y30.values, dims="cycle",
+        ds.attrs["y_reference"] - ds["y_at_settlement_force"].values, dims="cycle",
         attrs={"units": "m", "long_name": "settlement: drop of the loading ball at the "
                "settlement force on the loading branch since the end of static loading"})
-    for name, col, text in (("BR_T", "broken_tension", "tension"),
-                            ("BR_S", "broken_shear", "shear")):
-        out[name] = xr.DataArray(ds[col].values / max(n_bonds, 1), dims="cycle",
+    for name, col, text in (("breakage_rate_tension", "elements_broken_tension", "tension"),
+                            ("breakage_rate_shear", "elements_broken_shear", "shear")):
+        out[name] = xr.DataArray(ds[col].values / max(n_elements, 1), dims="cycle",
                                  attrs={"units": "1", "long_name": f"breakage rate in {text} "
                                         "(broken FJ elements / installed, eq. 4.6/4.7)"})
-    out["BR"] = xr.DataArray(out["BR_T"].values + out["BR_S"].values, dims="cycle",
-                             attrs={"units": "1", "long_name": "breakage rate (eq. 4.8)"})
-    try:
-        from .. import metrics   # noqa: F401  (lands with the metrics engineer's work)
-    except ImportError:
-        ds.attrs["metrics_package"] = "not installed: FPA, void ratio, ghost particles not computed"
-        return out
-    ds.attrs["metrics_package"] = "installed"
+    out["breakage_rate"] = xr.DataArray(
+        out["breakage_rate_tension"].values + out["breakage_rate_shear"].values, dims="cycle",
+        attrs={"units": "1", "long_name": "breakage rate (eq. 4.8)"})
     return out
 
 
@@ -137,19 +138,19 @@ def to_dataset(run, attrs=None):
     wall_kind[lay.right] = 3
     data["wall_kind"] = ("wall", wall_kind, {"flag_values": np.array([0, 1, 2, 3], np.int8),
                                              "flag_meanings": "outside bottom left right"})
-    n_bonds = int(rig.sim.bonds.state.size)
+    n_bonds = int(s["n_bonds0"]) * int(rig.sim.bonds.state.shape[1])
     ds = xr.Dataset(data, coords=coords, attrs={
         "title": "box-test case: per-cycle records and behaviours (thesis 4.2.3, 4.5.1)",
         "database": lay.database, "seed": lay.seed, "cycles_requested": run.cycles,
         "y_reference": s["y_ref"], "static_end_step": s["static_end_step"],
         "static_mean_forces_N": json.dumps(s["static_mean"]),
         "static_mean_wall_forces_N": json.dumps(s["static_walls"]),
-        "flat_joint_elements_installed": n_bonds,
+        "flat_joint_elements_at_loading_start": n_bonds,
         "thickness_m": float(rig.sim.prm[THICK]),
         "force_convention": "2D forces per thickness t (PFC2D); thesis loads applied directly",
         "rig_params_json": json.dumps(rig.params.to_dict()),
         "rig_layout_json": json.dumps(vars(lay)), **(attrs or {})})
-    for name, da in behaviours(ds, n_bonds).items():
+    for name, da in behaviours(run, ds, n_bonds).items():
         ds[name] = da
     return ds
 
