@@ -1,10 +1,10 @@
 # Stage 3: box-test cases (thesis 4.2.2, 4.2.3): one assembly and one loading run per
 # (database, case). Inputs: the bpm stage's library results/bpm/{db}.nc.
 # Config: rig (assembly and loading parameters), rig.cycles; cases per database:
-# config["cases"] (default 10, as in the thesis).
+# study.cases_per_database (default 10, as in the thesis).
 import json
 
-CASES = list(range(int(config.get("cases", 10))))
+CASES = list(range(int(config.get("study", {}).get("cases_per_database", 10))))
 
 
 rule case_assemble:
