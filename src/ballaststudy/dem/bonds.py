@@ -21,7 +21,7 @@ MODE_TENSION = 1
 MODE_SHEAR = 2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _strip(gc, th, a, b, compressed_only):
     """Integrals of g(s) and g(s)*s over [a, b] (restricted to g < 0 if asked)."""
     if compressed_only:
@@ -41,7 +41,7 @@ def _strip(gc, th, a, b, compressed_only):
     return i0, i1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _strip_sq(gc, th, a, b, compressed_only):
     """Integral of g(s)^2 over [a, b] (restricted to g < 0 if asked): strain energy."""
     if compressed_only:
@@ -61,7 +61,7 @@ def _strip_sq(gc, th, a, b, compressed_only):
     return fb - fa
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bond_forces(prm, step, pos, vel, omega, rad, stone, fa,
                 b_i, b_j, b_active, rbar, d0, gi, kn, ks, sigc, coh, tanphi, bmu,
                 theta, bmom, state, bfn, bfs,
@@ -168,7 +168,7 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, fa,
         fa[i, 2] += -mc - ai * ftot_s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bond_energy(pos, b_i, b_j, b_active, rbar, d0, kn, ks, theta, state, bfs, thick):
     """Elastic energy stored in flat joints: int 0.5 k_n t g(s)^2 ds over loaded parts
     plus 0.5 F_s^2 / (k_s A_e) per element."""

@@ -22,7 +22,7 @@ def mass_properties(x, y, r, rho, thick):
     return mt, cx, cy, inertia
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta):
     """Pebble position/velocity from the rigid motion of their clump."""
     for i in range(pos.shape[0]):
@@ -40,7 +40,7 @@ def place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, cth
         omega[i] = comega[c]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gather_clumps(gx, gy, pos, fa, clump, alive, cpos, cmass, cforce, cmoment):
     """Clump force = weight + sum of pebble forces; moment about the centre of mass."""
     for c in range(cpos.shape[0]):

@@ -17,7 +17,7 @@ from .neighbours import grow_rows, rebuild
 from .walls import move_walls, wall_forces
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def run_steps(nsteps, prm, cnt, err, eacc, lc,
               pos, vel, omega, rad, mass, inertia, minv, iinv, force, moment,
               stone, mat, fix, clump, offset, alive, pos0, fext, damp,
@@ -116,7 +116,7 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
     return (P.OK, nsteps, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _write_back(fa, force, moment):
     for i in range(force.shape[0]):
         force[i, 0] = fa[i, 0]

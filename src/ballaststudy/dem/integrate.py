@@ -15,7 +15,7 @@ from . import params as P
 from .contacts import LC_E, LC_KAPPA
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def first_half(dt, gx, gy, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat,
                fix, clump, alive, pos0, kin, cpos, cvel, comega, ctheta, cforce, cmoment,
                cmass, cinertia, cheld):
@@ -77,7 +77,7 @@ def first_half(dt, gx, gy, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat
     return d1, d2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def pebbles_moved(pos, vel, omega, fa, fext, minv, rad, mat, clump, alive, pos0,
                   kin, d1, d2):
     """After ``place_pebbles``: displacement, force reset (external load only: the clump
@@ -108,7 +108,7 @@ def pebbles_moved(pos, vel, omega, fa, fext, minv, rad, mat, clump, alive, pos0,
     return d1, d2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def reset_forces(gx, gy, mass, fext, force, moment, clump, alive):
     """Forces = weight + external load (pebbles: load only). Used before the first step."""
     for i in range(mass.shape[0]):
@@ -124,7 +124,7 @@ def reset_forces(gx, gy, mass, fext, force, moment, clump, alive):
         moment[i] = 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _damped(f, v, alpha):
     """PFC local damping: F - alpha |F| sign(v)."""
     if v > 0.0:
@@ -134,7 +134,7 @@ def _damped(f, v, alpha):
     return f
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive, damp,
                 cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp, eacc, err):
     """Local damping (per body: ``damp``, ``cdamp``; not on velocity-held dofs) + half
@@ -202,7 +202,7 @@ def second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive, damp,
     return P.OK
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def guards(prm, pos, vel, omega, alive, err):
     """NaN/Inf, runaway speed, ball outside the domain -> status code (params.py); the
     offending ball id and value go to err. One cheap pass: the slow path only on failure."""
@@ -239,7 +239,7 @@ def guards(prm, pos, vel, omega, alive, err):
     return P.LEFT_DOMAIN
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def critical_dt(prm, rad, mass, inertia, minv, iinv, mat, clump, alive, p_i, p_j, npair,
                 w_i, w_s, nwp, wmat, b_i, b_j, b_active, rbar, bkn, bks, lc):
     """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) over every pair of the Verlet

@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out_j):
     """Fill out_i/out_j with pairs i < j closer than r_i + r_j + skin, grouped by i
     (ascending). Pebbles of one clump are skipped. Returns the count, or -needed if over
@@ -113,7 +113,7 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
     return cnt
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def seg_closest(px, py, x0, y0, x1, y1):
     """Closest point of segment (x0,y0)-(x1,y1) to (px,py) and its parameter u in [0,1]."""
     ex = x1 - x0
@@ -126,7 +126,7 @@ def seg_closest(px, py, x0, y0, x1, y1):
     return x0 + u * ex, y0 + u * ey, u
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s):
     """Ball-segment pairs closer than r + skin, sorted by (ball, segment).
     Returns the count or -needed. O(N * segments): segments are few in a rig."""
@@ -168,7 +168,7 @@ def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s):
     return cnt
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def merge_history(old_i, old_j, old_h, n_old, new_i, new_j, n_new, out_h, n_rows):
     """out_h[k] = history of (new_i[k], new_j[k]) in the old list (grouped by i), else 0.
     Rows are short, so a linear search in the old row of i is the fastest match."""
@@ -190,7 +190,7 @@ def merge_history(old_i, old_j, old_h, n_old, new_i, new_j, n_new, out_h, n_rows
             out_h[k, c] = old_h[found, c] if found >= 0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def find_bond(bi, bj, i, j):
     """Index of bond (i, j) in the (i, j)-sorted bond arrays, or -1 (binary search)."""
     lo = 0
@@ -206,7 +206,7 @@ def find_bond(bi, bj, i, j):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rebuild(pos, rad, alive, clump, pos0, skin, xmin, ymin, xmax, ymax,
             p_i, p_j, p_h, p_bond, p_n, bond_i, bond_j, seg, w_i, w_s, w_h, w_n):
     """Rebuild both Verlet lists in place, carrying the contact history over.
@@ -244,7 +244,7 @@ def rebuild(pos, rad, alive, clump, pos0, skin, xmin, ymin, xmax, ymax,
     return 0, 0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def grow_rows(a, n):
     """Copy of ``a`` with ``n`` rows (new rows zero)."""
     out = np.zeros((n,) + a.shape[1:], a.dtype)

@@ -13,7 +13,7 @@ from .contacts import LC_BN, LC_BS, LC_E, LC_KAPPA, LC_MU, LC_NOTENSION, hooke_h
 from .neighbours import seg_closest
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def move_walls(seg, wvel, womega, centre, dt):
     """Rotate each segment about its centre by omega*dt, then translate by vel*dt.
     Returns the largest endpoint displacement (for the Verlet rebuild criterion)."""
@@ -35,7 +35,7 @@ def move_walls(seg, wvel, womega, centre, dt):
     return dmax
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _joint_elsewhere(px, py, seg, link, s, u):
     """True if a contact at an endpoint of segment s is handled by its neighbour: a start
     joint always belongs to the previous segment; an end joint only while the ball is not
@@ -50,7 +50,7 @@ def _joint_elsewhere(px, py, seg, link, s, u):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def wall_forces(prm, pos, vel, omega, rad, minv, mat, fa,
                 seg, wvel, womega, centre, wmat, link, wforce, wmoment,
                 w_i, w_s, w_h, w_fn, w_fs, nwp, lc, eacc):
