@@ -105,3 +105,12 @@ def test_outputs(full_run, tmp_path):
     text = paths[0].read_text()
     assert "<VTKFile" in text and 'Name="radius"' in text and 'Name="fragment"' in text
     assert ds.attrs["database"] == "tiny"
+
+
+def test_density_scaling_option(assembled):
+    rig = BoxRig.load(assembled[0])
+    dt0 = rig.sim.dt
+    rig.params.loading_dt_factor = 4.0
+    run = LoadingRun(rig, cycles=1).run()
+    assert rig.sim.dt == pytest.approx(4.0 * dt0)
+    assert len(run.cyc["force_max"]) == 1 and run.cyc["force_max"][0] >= 45e3

@@ -114,12 +114,17 @@ class BoxRig:
             os.unlink(tmp)
 
     @staticmethod
-    def sim_from_bytes(data):
+    def sim_from_bytes(data, source="checkpoint"):
         fd, tmp = tempfile.mkstemp(suffix=".npz")
         try:
             with os.fdopen(fd, "wb") as f:
                 f.write(data)
-            return Simulation.load_checkpoint(tmp)
+            try:
+                return Simulation.load_checkpoint(tmp)
+            except (ValueError, KeyError) as err:
+                raise ValueError(f"{source}: the engine state cannot be restored "
+                                 f"({str(err).replace(tmp, 'engine checkpoint')}); "
+                                 "assemble the case again") from None
         finally:
             os.unlink(tmp)
 
@@ -163,7 +168,7 @@ class BoxRig:
             data = np.asarray(ds["engine_checkpoint"].values, np.uint8).tobytes()
             lay = RigLayout(**json.loads(ds.attrs["rig_layout_json"]))
             prm = RigParams(**json.loads(ds.attrs["rig_params_json"]))
-        return cls(cls.sim_from_bytes(data), lay, prm)
+        return cls(cls.sim_from_bytes(data, path), lay, prm)
 
 
 def npz_bytes(**arrays):

@@ -58,7 +58,10 @@ def _case_run(args):
     else:
         if not Path(args.assembled).is_file():
             raise ConfigError(args.assembled, None, "file not found")
-        rig = BoxRig.load(args.assembled)
+        try:
+            rig = BoxRig.load(args.assembled)
+        except (ValueError, KeyError, OSError) as err:
+            raise ConfigError(args.assembled, None, f"not an assembled case ({err})") from None
         rig.params = params
         run = LoadingRun(rig, args.cycles, checkpoint=ckpt,
                          checkpoint_every=args.checkpoint_every, metrics=cfg.get("metrics"))

@@ -49,6 +49,18 @@ CYCLE_FIELDS = {
 }
 
 
+def set_density_scaling(sim, dt):
+    """Fixed timestep ``dt`` with density scaling (the engine raises each ball's inertial
+    mass so that dt is stable; gravity still acts on the real mass). The engine offers
+    this only in its constructor, so the rig sets the same run parameters here and asks
+    for a neighbour rebuild (which recomputes the inertial masses)."""
+    from ..dem import params as P
+    sim.prm[P.DT] = dt
+    sim.prm[P.AUTO_DT] = 0.0
+    sim.prm[P.DSCALE] = 1.0
+    sim._touch()
+
+
 class LoadingRun:
     """The loading state machine of one case. ``advance()`` = one control step."""
 
@@ -76,6 +88,8 @@ class LoadingRun:
         self.snap_contacts = []
         self.hooks = []      # callables(run, cycle) at the end of each cycle (VTK...)
         self._ckpt_due = False
+        if p.loading_dt_factor > 1.0:
+            set_density_scaling(rig.sim, p.loading_dt_factor * rig.sim.dt)
 
     # --------------------------------------------------------------- control law
     def _velocity(self, f):
@@ -322,7 +336,7 @@ class LoadingRun:
         from .params import RigParams
         with np.load(path, allow_pickle=False) as z:
             d = {k: z[k] for k in z.files}
-        sim = BoxRig.sim_from_bytes(d["engine"].tobytes())
+        sim = BoxRig.sim_from_bytes(d["engine"].tobytes(), path)
         rig = BoxRig(sim, RigLayout(**json.loads(str(d["layout"]))),
                      RigParams(**json.loads(str(d["params"]))))
         run = cls(rig, int(d["cycles"]) if cycles is None else cycles, checkpoint=path,

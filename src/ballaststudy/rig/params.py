@@ -59,6 +59,7 @@ class RigParams:
     settlement_force_kN: float = 30.0
     cycles: int = 1000
     control_every: int = 10
+    loading_dt_factor: float = 1.0
     checkpoint_every: int = 50
     snapshot_every: int = 10
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
