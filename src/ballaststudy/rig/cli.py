@@ -81,8 +81,13 @@ def _case_run(args):
             last[1] = phase
             bar.set_postfix_str(phase)
 
-    run.run(progress=progress, stop_after=args.stop_after)
-    bar.close()
+    try:
+        run.run(progress=progress, stop_after=args.stop_after)
+    except RuntimeError as err:      # a stage that does not converge: say where, exit 2
+        kept = f" (checkpoint kept: {ckpt})" if ckpt.exists() else ""
+        raise ConfigError(args.assembled, "rig", f"{err}{kept}") from None
+    finally:
+        bar.close()
     if run.s["phase"] != "done":
         print(f"stopped after cycle {run.s['cycle']} (checkpoint {ckpt})", file=sys.stderr)
         return
