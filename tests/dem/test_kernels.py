@@ -54,15 +54,22 @@ def test_wall_pairs_brute_force():
     seg = np.array([[0, 0, 0.3, 0], [0.3, 0, 0.3, 0.3], [0.05, 0.1, 0.2, 0.25]], float)
     oi = np.zeros(2000, np.int32)
     os_ = oi.copy()
-    c = build_wall_pairs(pos, rad, np.ones(400, np.uint8), seg, 0.003, oi, os_)
+    clear = np.zeros(400)
+    c = build_wall_pairs(pos, rad, np.ones(400, np.uint8), seg, 0.003, oi, os_, clear)
     ref = set()
+    gap = np.full(400, np.inf)
     for i in range(400):
         for s, (x0, y0, x1, y1) in enumerate(seg):
             e = np.array([x1 - x0, y1 - y0])
             u = np.clip(((pos[i] - [x0, y0]) @ e) / (e @ e), 0, 1)
-            if np.hypot(*(pos[i] - [x0, y0] - u * e)) < rad[i] + 0.003:
+            d = np.hypot(*(pos[i] - [x0, y0] - u * e))
+            if d < rad[i] + 0.003:
                 ref.add((i, s))
+            else:
+                gap[i] = min(gap[i], d - rad[i])
     assert set(zip(oi[:c].tolist(), os_[:c].tolist())) == ref
+    # clear: a lower bound of the gap to every unlisted segment, never below the skin
+    assert np.all(clear <= gap + 1e-15) and np.all(clear >= 0.003 - 1e-15)
 
 
 def test_strip_integrals():

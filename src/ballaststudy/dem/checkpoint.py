@@ -17,7 +17,7 @@ _PARTS = (("balls", Balls, "b_"), ("walls", Walls, "w_"), ("clumps", Clumps, "c_
           ("log", BreakLog, "l_"))
 _ARRAYS = ("prm", "cnt", "eacc", "err", "lc")
 _META = ("skin", "domain", "n_elements", "_prepared")
-FORMAT = 1      # bump when the saved arrays change
+FORMAT = 2      # bump when the saved arrays change
 
 
 def save_state(path, sim):

@@ -1,7 +1,8 @@
 """The fused stepping kernel: K steps of velocity Verlet inside numba, no Python per step.
 
-One step: half kick + drift (balls, clumps, walls) + force reset -> Verlet rebuild if two
-balls (or a ball and a wall) may have closed the skin since the last build -> ball-ball
+One step: walls move, half kick + drift (balls, clumps) + force reset -> Verlet rebuild
+if two balls (or a ball and a wall) may have closed the skin since the last build (exact
+test, see integrate.first_half) -> ball-ball
 contacts -> flat joints -> ball-wall contacts -> clump sums -> local damping + half kick
 -> guards. Returns early with a status code when a guard trips (after the full step).
 """
@@ -20,7 +21,7 @@ from .walls import move_walls, wall_forces
 @njit(cache=True, error_model="numpy")
 def run_steps(nsteps, prm, cnt, err, eacc, lc,
               pos, vel, omega, rad, mass, inertia, minv, iinv, force, moment,
-              stone, mat, fix, clump, offset, alive, pos0, fext, damp,
+              stone, mat, fix, clump, offset, alive, pos0, clear, fext, damp,
               seg, wvel, womega, centre, wforce, wmoment, wmat, link,
               cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment, cdamp,
               p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n,
@@ -45,21 +46,25 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
     for k in range(nsteps):
         dt = prm[P.DT]
         dt_next = dt
-        d1, d2 = first_half(dt, prm[P.GX], prm[P.GY], pos, vel, omega, fa, mass,
-                            fext, minv, iinv, rad, mat, fix, clump, alive, pos0, kin,
-                            cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia,
-                            cheld)
+        prm[P.WALL_TRAVEL] += move_walls(seg, wvel, womega, centre, dt)   # wall travel since build
+        cx = prm[P.SHIFT_X]
+        cy = prm[P.SHIFT_Y]
+        wt = prm[P.WALL_TRAVEL]
+        d1, d2, near_wall, sx, sy, nfree = first_half(
+            dt, prm[P.GX], prm[P.GY], cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, iinv,
+            rad, mat, fix, clump, alive, pos0, clear, kin, cpos, cvel, comega, ctheta, cforce,
+            cmoment, cmass, cinertia, cheld)
         if cpos.shape[0] > 0:
             place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
-            d1, d2 = pebbles_moved(pos, vel, omega, fa, fext, minv, rad, mat, clump,
-                                   alive, pos0, kin, d1, d2)
-        prm[P.WALL_TRAVEL] += move_walls(seg, wvel, womega, centre, dt)   # wall travel since build
-        d1 = d1 ** 0.5
-        d2 = d2 ** 0.5
-        # exact validity of the lists: two balls closing in, or a ball and a wall
-        if cnt[2] > 0 or d1 + d2 > skin or d1 + prm[P.WALL_TRAVEL] > skin:
+            d1, d2, near_wall = pebbles_moved(cx, cy, wt, pos, vel, omega, fa, fext, minv, rad,
+                                              mat, clump, alive, pos0, clear, kin, d1, d2,
+                                              near_wall)
+        if nfree > 0:       # next step's common shift: this step's mean displacement
+            prm[P.SHIFT_X] = sx / nfree
+            prm[P.SHIFT_Y] = sy / nfree
+        if cnt[2] > 0 or near_wall or d1 ** 0.5 + d2 ** 0.5 > skin:
             while True:
-                st, need = rebuild(pos, rad, alive, clump, pos0, prm[P.SKIN], prm[P.XMIN],
+                st, need = rebuild(pos, rad, alive, clump, pos0, clear, prm[P.SKIN], prm[P.XMIN],
                                    prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], p_i, p_j, p_h,
                                    p_bond, p_n, b_i, b_j, seg, w_i, w_s, w_h, w_n)
                 if st == 0:
@@ -81,6 +86,8 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
             cnt[1] += 1
             cnt[2] = 0
             prm[P.WALL_TRAVEL] = 0.0
+            prm[P.SHIFT_X] = 0.0
+            prm[P.SHIFT_Y] = 0.0
             if prm[P.AUTO_DT] > 0.0 or prm[P.DSCALE] > 0.0:
                 dtc = critical_dt(prm, rad, mass, inertia, minv, iinv, mat, clump, alive,
                                   p_i, p_j, p_n[0], w_i, w_s, w_n[0], wmat, b_i, b_j,

@@ -16,17 +16,25 @@ from .contacts import LC_E, LC_KAPPA
 
 
 @njit(cache=True, error_model="numpy")
-def first_half(dt, gx, gy, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat,
-               fix, clump, alive, pos0, kin, cpos, cvel, comega, ctheta, cforce, cmoment,
-               cmass, cinertia, cheld):
+def first_half(dt, gx, gy, cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat,
+               fix, clump, alive, pos0, clear, kin, cpos, cvel, comega, ctheta, cforce,
+               cmoment, cmass, cinertia, cheld):
     """One pass per free ball: half kick (held dofs keep their velocity), drift, the
     displacement since the last neighbour build, force reset to weight + external load,
     and the packed row ``kin`` the pair loop reads. Then half kick + drift of clumps.
-    Returns the two largest squared displacements (the Verlet list stays valid while
-    d1 + d2 < skin: only two different balls can close a gap)."""
+
+    Verlet-list validity (exact, by the triangle inequality): a pair not listed had a
+    gap > skin, and |dx_i - dx_j| <= |dx_i - c| + |dx_j - c| for ANY common vector c;
+    c = the mean displacement of the previous step, so a bed falling as a whole does not
+    force rebuilds. A ball may reach an unlisted wall segment only after moving
+    clear[i] - wall travel. Returns (top-2 squared |dx - c|, wall flag, sum dx, sum dy, n)."""
     h = 0.5 * dt
     d1 = 0.0
     d2 = 0.0
+    near_wall = False
+    sx = 0.0
+    sy = 0.0
+    cnt = 0
     for i in range(pos.shape[0]):
         if clump[i] >= 0:
             continue
@@ -48,13 +56,21 @@ def first_half(dt, gx, gy, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat
         pos[i, 1] = y
         dx = x - pos0[i, 0]
         dy = y - pos0[i, 1]
-        dd = dx * dx + dy * dy
+        sx += dx
+        sy += dy
+        cnt += 1
+        rx = dx - cx
+        ry = dy - cy
+        dd = rx * rx + ry * ry
         if dd > d2:
             if dd > d1:
                 d2 = d1
                 d1 = dd
             else:
                 d2 = dd
+        lim = clear[i] - wt
+        if lim <= 0.0 or dx * dx + dy * dy >= lim * lim:
+            near_wall = True
         fa[i, 0] = mass[i] * gx + fext[i, 0]
         fa[i, 1] = mass[i] * gy + fext[i, 1]
         fa[i, 2] = 0.0
@@ -74,26 +90,31 @@ def first_half(dt, gx, gy, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat
         cpos[c, 0] += dt * cvel[c, 0]
         cpos[c, 1] += dt * cvel[c, 1]
         ctheta[c] += dt * comega[c]
-    return d1, d2
+    return d1, d2, near_wall, sx, sy, cnt
 
 
 @njit(cache=True, error_model="numpy")
-def pebbles_moved(pos, vel, omega, fa, fext, minv, rad, mat, clump, alive, pos0,
-                  kin, d1, d2):
-    """After ``place_pebbles``: displacement, force reset (external load only: the clump
-    carries the weight) and packed rows for pebbles. Returns the updated top-2."""
+def pebbles_moved(cx, cy, wt, pos, vel, omega, fa, fext, minv, rad, mat, clump, alive, pos0,
+                  clear, kin, d1, d2, near_wall):
+    """After ``place_pebbles``: the same list checks, force reset (external load only:
+    the clump carries the weight) and packed rows for pebbles."""
     for i in range(pos.shape[0]):
         if clump[i] < 0 or not alive[i]:
             continue
         dx = pos[i, 0] - pos0[i, 0]
         dy = pos[i, 1] - pos0[i, 1]
-        dd = dx * dx + dy * dy
+        rx = dx - cx
+        ry = dy - cy
+        dd = rx * rx + ry * ry
         if dd > d2:
             if dd > d1:
                 d2 = d1
                 d1 = dd
             else:
                 d2 = dd
+        lim = clear[i] - wt
+        if lim <= 0.0 or dx * dx + dy * dy >= lim * lim:
+            near_wall = True
         fa[i, 0] = fext[i, 0]
         fa[i, 1] = fext[i, 1]
         fa[i, 2] = 0.0
@@ -105,7 +126,7 @@ def pebbles_moved(pos, vel, omega, fa, fext, minv, rad, mat, clump, alive, pos0,
         kin[i, 5] = rad[i]
         kin[i, 6] = minv[i]
         kin[i, 7] = mat[i]
-    return d1, d2
+    return d1, d2, near_wall
 
 
 @njit(cache=True, error_model="numpy")

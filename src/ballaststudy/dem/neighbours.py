@@ -4,6 +4,8 @@ Pair lists are grouped by i (ascending) so that contact history survives a rebui
 search in the short old row of i. The order only depends on the positions at the build,
 so a run is bitwise reproducible (the checkpoint keeps the list and the build positions).
 """
+import math
+
 import numpy as np
 from numba import njit
 
@@ -127,9 +129,11 @@ def seg_closest(px, py, x0, y0, x1, y1):
 
 
 @njit(cache=True, error_model="numpy")
-def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s):
+def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s, clear):
     """Ball-segment pairs closer than r + skin, sorted by (ball, segment).
-    Returns the count or -needed. O(N * segments): segments are few in a rig."""
+    clear[i] = a lower bound of the gap between ball i and every segment NOT listed with
+    it (>= skin): ball i cannot touch a new segment before moving clear[i] minus the wall
+    travel. Returns the count or -needed. O(N * segments): segments are few in a rig."""
     cap = out_i.shape[0]
     ns = seg.shape[0]
     rmax = 0.0
@@ -147,22 +151,28 @@ def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s):
         box[s, 3] = max(seg[s, 1], seg[s, 3]) + g
     cnt = 0
     for i in range(pos.shape[0]):
+        clear[i] = 1.0e30
         if not alive[i]:
             continue
         px = pos[i, 0]
         py = pos[i, 1]
         for s in range(ns):
             if px < box[s, 0] or px > box[s, 2] or py < box[s, 1] or py > box[s, 3]:
+                # outside the grown box: farther than r_max + skin from the segment
+                clear[i] = min(clear[i], rmax + skin - rad[i])
                 continue
             cx, cy, u = seg_closest(px, py, seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
             dx = px - cx
             dy = py - cy
             cut = rad[i] + skin
-            if dx * dx + dy * dy < cut * cut:
+            d2 = dx * dx + dy * dy
+            if d2 < cut * cut:
                 if cnt < cap:
                     out_i[cnt] = i
                     out_s[cnt] = s
                 cnt += 1
+            else:
+                clear[i] = min(clear[i], math.sqrt(d2) - rad[i])
     if cnt > cap:
         return -cnt
     return cnt
@@ -207,7 +217,7 @@ def find_bond(bi, bj, i, j):
 
 
 @njit(cache=True, error_model="numpy")
-def rebuild(pos, rad, alive, clump, pos0, skin, xmin, ymin, xmax, ymax,
+def rebuild(pos, rad, alive, clump, pos0, clear, skin, xmin, ymin, xmax, ymax,
             p_i, p_j, p_h, p_bond, p_n, bond_i, bond_j, seg, w_i, w_s, w_h, w_n):
     """Rebuild both Verlet lists in place, carrying the contact history over.
     Returns (0, 0), or (1 | 2, needed) if the pair | wall-pair arrays are too small
@@ -221,7 +231,7 @@ def rebuild(pos, rad, alive, clump, pos0, skin, xmin, ymin, xmax, ymax,
     wn_old = w_n[0]
     nw_i = np.empty(w_i.shape[0], np.int32)
     nw_s = np.empty(w_i.shape[0], np.int32)
-    wcnt = build_wall_pairs(pos, rad, alive, seg, skin, nw_i, nw_s)
+    wcnt = build_wall_pairs(pos, rad, alive, seg, skin, nw_i, nw_s, clear)
     if wcnt < 0:
         return 2, -wcnt
     old_h = p_h[:n_old].copy()

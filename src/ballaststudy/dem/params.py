@@ -28,7 +28,9 @@ DT_SAFETY = 19    # f [-]
 DSCALE = 20       # 1 = density scaling (inertial masses set so that dt_crit = dt/f)
 TIME = 21         # simulated time [s]
 WALL_TRAVEL = 23  # wall endpoint travel since the last neighbour build [m]
-NPRM = 24
+SHIFT_X = 24      # common displacement estimate c (mean of the previous step) [m]
+SHIFT_Y = 25
+NPRM = 26
 
 LAW_PFC = 0
 LAW_HOOKE = 1

@@ -353,9 +353,10 @@ class Simulation:
     def _rebuild(self):
         b, pr, wp, bd, p = self.balls, self.pairs, self.wpairs, self.bonds, self.prm
         while True:
-            st, need = rebuild(b.pos, b.rad, b.alive, b.clump, b.pos0, p[P.SKIN], p[P.XMIN],
-                               p[P.YMIN], p[P.XMAX], p[P.YMAX], pr.i, pr.j, pr.hist, pr.bond,
-                               pr.n, bd.i, bd.j, self.walls.seg, wp.i, wp.s, wp.hist, wp.n)
+            st, need = rebuild(b.pos, b.rad, b.alive, b.clump, b.pos0, b.clear, p[P.SKIN],
+                               p[P.XMIN], p[P.YMIN], p[P.XMAX], p[P.YMAX], pr.i, pr.j,
+                               pr.hist, pr.bond, pr.n, bd.i, bd.j, self.walls.seg, wp.i, wp.s,
+                               wp.hist, wp.n)
             if st == 0:
                 break
             cap = need + need // 4 + 16
@@ -369,6 +370,8 @@ class Simulation:
         self.cnt[1] += 1
         self.cnt[2] = 0
         p[P.WALL_TRAVEL] = 0.0
+        p[P.SHIFT_X] = 0.0
+        p[P.SHIFT_Y] = 0.0
         dtc = self.critical_dt()
         if p[P.AUTO_DT]:
             if dtc >= 1e30:
@@ -417,9 +420,11 @@ class Simulation:
         out = run_steps(k, self.prm, self.cnt, self.err, self.eacc, self.lc,
                         b.pos, b.vel, b.omega, b.rad, b.mass, b.inertia, b.minv, b.iinv,
                         b.force, b.moment, b.stone, b.mat, b.fix, b.clump, b.offset, b.alive,
-                        b.pos0, b.fext, b.damp, w.seg, w.vel, w.omega, w.centre, w.force, w.moment, w.mat,
-                        w.link, c.pos, c.vel, c.omega, c.theta, c.mass, c.inertia, c.held,
-                        c.force, c.moment, c.damp, pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs, pr.n,
+                        b.pos0, b.clear, b.fext, b.damp, w.seg, w.vel, w.omega, w.centre,
+                        w.force, w.moment, w.mat, w.link,
+                        c.pos, c.vel, c.omega, c.theta, c.mass, c.inertia, c.held,
+                        c.force, c.moment, c.damp,
+                        pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs, pr.n,
                         wp.i, wp.s, wp.hist, wp.fn, wp.fs, wp.n,
                         bd.i, bd.j, bd.active, bd.rbar, bd.d0, bd.gi, bd.kn, bd.ks, bd.sigc,
                         bd.coh, bd.tanphi, bd.mu, bd.theta, bd.moment, bd.state, bd.fn, bd.fs,

@@ -51,6 +51,7 @@ class Balls(_Arrays):
     offset: np.ndarray = _z(0, 2)
     alive: np.ndarray = _z(0, dtype=np.uint8)
     pos0: np.ndarray = _z(0, 2)       # positions at the last neighbour build
+    clear: np.ndarray = _z(0)         # gap to the nearest unlisted wall segment at that build
     fext: np.ndarray = _z(0, 2)       # external force set by the caller (a load) [N]
     damp: np.ndarray = _z(0)          # PFC local damping coefficient alpha [-]
 
