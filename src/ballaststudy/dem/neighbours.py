@@ -74,21 +74,19 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
                 rq = rs[q] + skin
                 cq = cl[q]
                 iq = ids[q]
-                # own cell (later entries) and the 4 forward neighbours
-                for nb in range(5):
-                    if nb == 0:
-                        c2 = c
+                # half stencil as two contiguous ranges of the cell-ordered arrays: the rest
+                # of the own cell + the right neighbour, and the three cells of the row above
+                for part in range(2):
+                    if part == 0:
                         lo = q + 1
+                        hi = start[c + 2] if cx + 1 < ncx else start[c + 1]
                     else:
-                        dx = 1 if nb == 1 else (nb - 3)      # (1,0) (-1,1) (0,1) (1,1)
-                        dy = 0 if nb == 1 else 1
-                        xx = cx + dx
-                        yy = cy + dy
-                        if xx < 0 or xx >= ncx or yy >= ncy:
-                            continue
-                        c2 = yy * ncx + xx
-                        lo = start[c2]
-                    for r in range(lo, start[c2 + 1]):
+                        if cy + 1 >= ncy:
+                            break
+                        up = (cy + 1) * ncx
+                        lo = start[up + max(cx - 1, 0)]
+                        hi = start[up + min(cx + 1, ncx - 1) + 1]
+                    for r in range(lo, hi):
                         ddx = xs[r] - xq
                         ddy = ys[r] - yq
                         cut = rq + rs[r]
