@@ -215,6 +215,7 @@ class LoadingRun:
         for k, v in row.items():
             self.cyc[k].append(v)
         s["rows"].append(self.behaviours())
+        self._thin_samples(s["cyc_sample0"])
         c = s["cycle"]
         for hook in self.hooks:
             hook(self, c)
@@ -224,6 +225,19 @@ class LoadingRun:
         if self.checkpoint and (s["cycle"] % self.checkpoint_every == 0
                                 or s["phase"] == "done"):
             self._ckpt_due = True      # saved once this control step is complete
+
+    def _thin_samples(self, k0):
+        """Keep every ``timeseries_every``-th sample of the finished cycle (and its last),
+        so a 1000-cycle run stays a few tens of MB; the behaviours saw them all."""
+        k = max(1, int(self.rig.params.timeseries_every))
+        if k == 1:
+            return
+        n = len(self.samples["step"])
+        keep = list(range(k0, n, k))
+        if keep and keep[-1] != n - 1:
+            keep.append(n - 1)
+        for name, v in self.samples.items():
+            v[k0:] = [v[i] for i in keep]
 
     # --------------------------------------------------------------- behaviours
     def snapshot(self):

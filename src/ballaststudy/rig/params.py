@@ -62,6 +62,7 @@ class RigParams:
     loading_dt_factor: float = 1.0
     checkpoint_every: int = 50
     snapshot_every: int = 10
+    timeseries_every: int = 10
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
     max_cycle_steps: int = 400000
 
