@@ -1,7 +1,7 @@
 """Box-test case benchmark: one case at the config's (thesis-like) resolution.
 
     NUMBA_NUM_THREADS=1 python bench/case_benchmark.py [--cycles 50] [--r0 0.0025]
-        [--config config/config.yaml] [--library BPM.nc]
+        [--config config/config.yaml] [--library BPM.nc] [--dt-factor F]
 
 Uses the BPM library given (default: a synthetic one in the bpm format with ball radius
 r0, stones 22.4-63 mm) and the rig parameters of the config. Prints assembly and static
@@ -24,6 +24,7 @@ def main(argv=None):
     ap.add_argument("--library", help="a BPM.nc instead of the synthetic library")
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--dt-factor", type=float, help="override rig.loading_dt_factor (density scaling)")
     a = ap.parse_args(argv)
     from ballaststudy.config import load_config
     from ballaststudy.rig.assembly import assemble
@@ -31,6 +32,8 @@ def main(argv=None):
     from ballaststudy.rig.loading import LoadingRun
     from ballaststudy.rig.params import RigParams
     params = RigParams.from_config(load_config(a.config).get("rig", {}))
+    if a.dt_factor is not None:
+        params.loading_dt_factor = a.dt_factor
     lib = load_library(a.library) if a.library else Library(
         synthetic_library(60, size=(0.0224, 0.063), r0=a.r0, seed=a.seed, database="bench"))
     t0 = time.perf_counter()
@@ -53,7 +56,8 @@ def main(argv=None):
         print("minutes_per_1000_cycles=nan")
         return 1
     t_static = time.perf_counter() - t1
-    print(f"static loading: {t_static:.1f} s, {rig.sim.step - s1} steps")
+    print(f"static loading: {t_static:.1f} s, {rig.sim.step - s1} steps, loading dt={rig.sim.dt:.3g} s "
+          f"(dt factor {params.loading_dt_factor:g})")
     t2, s2 = time.perf_counter(), rig.sim.step
     run.run()
     t_cyc = time.perf_counter() - t2
