@@ -3,8 +3,10 @@
     NUMBA_NUM_THREADS=1 python bench/case_benchmark.py [--cycles 50] [--r0 0.0025]
         [--config config/config.yaml] [--library BPM.nc] [--dt-factor F]
 
-Uses the BPM library given (default: a synthetic one in the bpm format with ball radius
-r0, stones 22.4-63 mm) and the rig parameters of the config. Prints assembly and static
+Uses the BPM library given, else builds the box_test database's forms and BPM library with
+the config (cached in results/bench_cache; a few minutes once), or with --synthetic a
+synthetic library in the bpm format (ball radius r0, stones 22.4-63 mm); the rig
+parameters are the config's. Prints assembly and static
 loading times separately, then time per cycle, balls, bonds, steps per cycle and, LAST,
 ``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase. Never a test."""
 import argparse
@@ -17,11 +19,26 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 
+def box_test_library(config, cache="results/bench_cache"):
+    """forms + BPM library of the box_test database (built once, then reused)."""
+    from ballaststudy.cli import main as cli
+    bpm = os.path.join(cache, "box_test_bpm.nc")
+    if not os.path.exists(bpm):
+        t = time.perf_counter()
+        forms = os.path.join(cache, "box_test.nc")
+        if not os.path.exists(forms):
+            cli(["forms", "generate", "box_test", "--out", cache, "--config", config, "--quiet"])
+        cli(["bpm", "build", forms, "--out", bpm, "--config", config, "--quiet"])
+        print(f"built {bpm} in {time.perf_counter() - t:.0f} s (not timed below)")
+    return bpm
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cycles", type=int, default=50)
     ap.add_argument("--r0", type=float, default=0.0025, help="ball radius of the synthetic library [m]")
-    ap.add_argument("--library", help="a BPM.nc instead of the synthetic library")
+    ap.add_argument("--library", help="a BPM.nc (default: build box_test's)")
+    ap.add_argument("--synthetic", action="store_true", help="synthetic library instead")
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--dt-factor", type=float, help="override rig.loading_dt_factor (density scaling)")
@@ -34,8 +51,11 @@ def main(argv=None):
     params = RigParams.from_config(load_config(a.config).get("rig", {}))
     if a.dt_factor is not None:
         params.loading_dt_factor = a.dt_factor
-    lib = load_library(a.library) if a.library else Library(
-        synthetic_library(60, size=(0.0224, 0.063), r0=a.r0, seed=a.seed, database="bench"))
+    if a.synthetic:
+        lib = Library(synthetic_library(60, size=(0.0224, 0.063), r0=a.r0, seed=a.seed,
+                                        database="bench"))
+    else:
+        lib = load_library(a.library or box_test_library(a.config))
     t0 = time.perf_counter()
     rig = assemble(lib, params, seed=a.seed)
     t_asm = time.perf_counter() - t0
