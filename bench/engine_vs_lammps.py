@@ -114,6 +114,9 @@ def main(argv=None):
         print("LAMMPS binary 'lmp' not found. Install it with:  apt-get install -y lammps",
               file=sys.stderr)
         return 2
+    if not os.path.exists(os.path.join(a.lammps_dir, "run.sh")):
+        print(f"no run.sh in {a.lammps_dir} (give --lammps-dir)", file=sys.stderr)
+        return 2
     print(f"settle2d N={a.n} steps={a.steps} dt={derived()['dt']:.6e} "
           f"NUMBA_NUM_THREADS={os.environ['NUMBA_NUM_THREADS']}")
     lmp_bsps, line, err = run_lammps(a.lammps_dir, a.n, a.steps)
