@@ -80,3 +80,27 @@ def test_strip_integrals():
     i0, _ = _strip(0.3, 0.5, -1.0, 1.0, True)
     assert np.isclose(i0, -0.04), i0
     assert _strip(0.1, 0.0, -1.0, 1.0, True) == (0.0, 0.0)
+
+
+def test_verlet_validity_test_misses_no_contact():
+    """A packing thrown sideways and down into a wall corner: the lazy rebuild (exact test
+    on displacements relative to the common shift, per-ball wall clearance) must give the
+    same motion as rebuilding before every step (only rounding may differ)."""
+    from ballaststudy.dem import ContactMaterial, Simulation
+    from ballaststudy.dem.generate import random_disks
+
+    def model():
+        sim = Simulation(gravity=(0, -50.0), dt=1e-5, domain=(-0.1, -0.1, 0.3, 0.3), skin=0.001)
+        sim.set_contact_material(ContactMaterial(E=1e7, mu=0.4, beta_n=0.1))
+        sim.add_wall([(0.0, 0.2), (0.0, 0.0), (0.2, 0.0)])
+        x, y, r, vx, vy = random_disks(60, 0.02, 0.12, 0.01, 0.003, 0.005, seed=9, vmax=0.3)
+        sim.add_balls(x, y, r, 2650.0, vx=vx - 1.5, vy=vy - 0.5)
+        return sim
+    lazy, eager = model(), model()
+    seen = []
+    lazy.run(3000, callback=lambda s: seen.append(len(s.contact_list()["i"])), every=50)
+    eager.run(3000, callback=lambda s: s._touch(), every=1)
+    assert eager.n_rebuilds > 10 * lazy.n_rebuilds > 0
+    dx = np.abs(lazy.balls.pos - eager.balls.pos).max()
+    assert dx < 1e-9, f"lazy and eager neighbour lists diverge by {dx:.3e} m"
+    assert max(seen) > 30, f"too few contacts to test: {max(seen)}"
