@@ -62,7 +62,7 @@ def _strip_sq(gc, th, a, b, compressed_only):
 
 
 @njit(cache=True, error_model="numpy")
-def bond_forces(prm, step, pos, vel, omega, rad, stone, fa,
+def bond_forces(prm, step, kin, rad, stone, fa,
                 b_i, b_j, b_active, rbar, d0, gi, kn, ks, sigc, coh, tanphi, bmu,
                 theta, bmom, state, bfn, bfs,
                 l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
@@ -76,8 +76,8 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, fa,
             continue
         i = b_i[b]
         j = b_j[b]
-        dx = pos[j, 0] - pos[i, 0]
-        dy = pos[j, 1] - pos[i, 1]
+        dx = kin[j, 0] - kin[i, 0]
+        dy = kin[j, 1] - kin[i, 1]
         d = math.sqrt(dx * dx + dy * dy)
         nx = dx / d
         ny = dy / d
@@ -85,9 +85,9 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, fa,
         ty = nx
         ai = rad[i] + 0.5 * (d - rad[i] - rad[j])     # centre -> interface centre
         aj = d - ai
-        w = omega[i] * ai + omega[j] * aj
-        vt = (vel[j, 0] - vel[i, 0] - w * tx) * tx + (vel[j, 1] - vel[i, 1] - w * ty) * ty
-        theta[b] += (omega[j] - omega[i]) * dt
+        w = kin[i, 4] * ai + kin[j, 4] * aj
+        vt = (kin[j, 2] - kin[i, 2] - w * tx) * tx + (kin[j, 3] - kin[i, 3] - w * ty) * ty
+        theta[b] += (kin[j, 4] - kin[i, 4]) * dt
         th = theta[b]
         gc = d - d0[b]
         le = 2.0 * rbar[b] / ne
@@ -122,8 +122,8 @@ def bond_forces(prm, step, pos, vel, omega, rad, stone, fa,
                     l_j[k] = j
                     l_stone[k] = stone[i]
                     l_mode[k] = mode
-                    l_x[k] = pos[i, 0] + ai * nx + se * tx
-                    l_y[k] = pos[i, 1] + ai * ny + se * ty
+                    l_x[k] = kin[i, 0] + ai * nx + se * tx
+                    l_y[k] = kin[i, 1] + ai * ny + se * ty
                     l_stress[k] = sig if mode == MODE_TENSION else tau
                     l_n[0] = k + 1
                     state[b, e] = 0

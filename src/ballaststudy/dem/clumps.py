@@ -23,9 +23,9 @@ def mass_properties(x, y, r, rho, thick):
 
 
 @njit(cache=True, error_model="numpy")
-def place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta):
+def place_pebbles(kin, clump, offset, alive, cpos, cvel, comega, ctheta):
     """Pebble position/velocity from the rigid motion of their clump."""
-    for i in range(pos.shape[0]):
+    for i in range(kin.shape[0]):
         c = clump[i]
         if c < 0 or not alive[i]:
             continue
@@ -33,25 +33,25 @@ def place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, cth
         sn = math.sin(ctheta[c])
         ox = cs * offset[i, 0] - sn * offset[i, 1]
         oy = sn * offset[i, 0] + cs * offset[i, 1]
-        pos[i, 0] = cpos[c, 0] + ox
-        pos[i, 1] = cpos[c, 1] + oy
-        vel[i, 0] = cvel[c, 0] - comega[c] * oy
-        vel[i, 1] = cvel[c, 1] + comega[c] * ox
-        omega[i] = comega[c]
+        kin[i, 0] = cpos[c, 0] + ox
+        kin[i, 1] = cpos[c, 1] + oy
+        kin[i, 2] = cvel[c, 0] - comega[c] * oy
+        kin[i, 3] = cvel[c, 1] + comega[c] * ox
+        kin[i, 4] = comega[c]
 
 
 @njit(cache=True, error_model="numpy")
-def gather_clumps(gx, gy, pos, fa, clump, alive, cpos, cmass, cforce, cmoment):
+def gather_clumps(gx, gy, kin, fa, clump, alive, cpos, cmass, cforce, cmoment):
     """Clump force = weight + sum of pebble forces; moment about the centre of mass."""
     for c in range(cpos.shape[0]):
         cforce[c, 0] = cmass[c] * gx
         cforce[c, 1] = cmass[c] * gy
         cmoment[c] = 0.0
-    for i in range(pos.shape[0]):
+    for i in range(kin.shape[0]):
         c = clump[i]
         if c < 0 or not alive[i]:
             continue
         cforce[c, 0] += fa[i, 0]
         cforce[c, 1] += fa[i, 1]
-        cmoment[c] += fa[i, 2] + (pos[i, 0] - cpos[c, 0]) * fa[i, 1] \
-            - (pos[i, 1] - cpos[c, 1]) * fa[i, 0]
+        cmoment[c] += fa[i, 2] + (kin[i, 0] - cpos[c, 0]) * fa[i, 1] \
+            - (kin[i, 1] - cpos[c, 1]) * fa[i, 0]

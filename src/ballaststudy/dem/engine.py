@@ -12,7 +12,7 @@ from numba import njit
 from . import params as P
 from .bonds import bond_forces
 from .clumps import gather_clumps, place_pebbles
-from .contacts import pair_forces
+from .contacts import pack_kinematics, pair_forces
 from .integrate import critical_dt, first_half, pebbles_moved, second_half
 from .neighbours import grow_rows, rebuild
 from .walls import move_walls, wall_forces
@@ -35,7 +35,10 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
     pair and wall-pair arrays are returned: (status, steps done, p_i, p_j, p_h, p_bond,
     p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)."""
     skin = prm[P.SKIN]
+    # packed per-ball rows the kernels work on during the chunk (one cache line per ball):
+    # kin = (x, y, vx, vy, omega, R, 1/m, material); written back when the chunk ends
     kin = np.empty((pos.shape[0], 8))
+    pack_kinematics(pos, vel, omega, rad, minv, mat, kin)
     # one accumulator row (fx, fy, mz) per ball: a single cache line per scattered update;
     # the public force/moment arrays are written back when the chunk ends
     fa = np.zeros((pos.shape[0], 4))
@@ -51,18 +54,20 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
         cy = prm[P.SHIFT_Y]
         wt = prm[P.WALL_TRAVEL]
         d1, d2, near_wall, sx, sy, nfree = first_half(
-            dt, prm[P.GX], prm[P.GY], cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, iinv,
-            rad, mat, fix, clump, alive, pos0, clear, kin, cpos, cvel, comega, ctheta, cforce,
-            cmoment, cmass, cinertia, cheld)
+            dt, prm[P.GX], prm[P.GY], cx, cy, wt, kin, fa, mass, fext, minv, iinv, fix, clump,
+            alive, pos0, clear, cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia,
+            cheld)
         if cpos.shape[0] > 0:
-            place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
-            d1, d2, near_wall = pebbles_moved(cx, cy, wt, pos, vel, omega, fa, fext, minv, rad,
-                                              mat, clump, alive, pos0, clear, kin, d1, d2,
-                                              near_wall)
+            place_pebbles(kin, clump, offset, alive, cpos, cvel, comega, ctheta)
+            d1, d2, near_wall = pebbles_moved(cx, cy, wt, kin, fa, fext, clump, alive, pos0,
+                                              clear, d1, d2, near_wall)
         if nfree > 0:       # next step's common shift: this step's mean displacement
             prm[P.SHIFT_X] = sx / nfree
             prm[P.SHIFT_Y] = sy / nfree
         if cnt[2] > 0 or near_wall or d1 ** 0.5 + d2 ** 0.5 > skin:
+            for i in range(pos.shape[0]):
+                pos[i, 0] = kin[i, 0]
+                pos[i, 1] = kin[i, 1]
             while True:
                 st, need = rebuild(pos, rad, alive, clump, pos0, clear, prm[P.SKIN], prm[P.XMIN],
                                    prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], p_i, p_j, p_h,
@@ -92,6 +97,8 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
                 dtc = critical_dt(prm, rad, mass, inertia, minv, iinv, mat, clump, alive,
                                   p_i, p_j, p_n[0], w_i, w_s, w_n[0], wmat, b_i, b_j,
                                   b_active, rbar, bkn, bks, lc)
+                for i in range(pos.shape[0]):
+                    kin[i, 6] = minv[i]           # density scaling may have changed it
                 if prm[P.AUTO_DT] > 0.0 and dtc < 1.0e30:
                     dt_next = prm[P.DT_SAFETY] * dtc   # applies from the next step
         cnt[0] += 1
@@ -99,33 +106,38 @@ def run_steps(nsteps, prm, cnt, err, eacc, lc,
         pair_forces(prm, kin, fa, p_i, p_j, p_h, p_bond, p_fn, p_fs, p_n[0],
                     b_active, lc, eacc)
         if b_i.shape[0] > 0:
-            bond_forces(prm, cnt[0], pos, vel, omega, rad, stone, fa,
+            bond_forces(prm, cnt[0], kin, rad, stone, fa,
                         b_i, b_j, b_active, rbar, d0, gi, bkn, bks, sigc, coh, tanphi, bmu,
                         theta, bmom, state, bfn, bfs,
                         l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
                         l_stress, l_n, eacc)
-        wall_forces(prm, pos, vel, omega, rad, minv, mat, fa,
+        wall_forces(prm, kin, rad, minv, mat, fa,
                     seg, wvel, womega, centre, wmat, link, wforce, wmoment,
                     w_i, w_s, w_h, w_fn, w_fs, w_n[0], lc, eacc)
         if cpos.shape[0] > 0:
-            gather_clumps(prm[P.GX], prm[P.GY], pos, fa, clump, alive, cpos, cmass,
+            gather_clumps(prm[P.GX], prm[P.GY], kin, fa, clump, alive, cpos, cmass,
                           cforce, cmoment)
-        st = second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive,
+        st = second_half(prm, kin, fa, minv, iinv, fix, clump, alive,
                          damp, cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp,
                          eacc, err)
         if cpos.shape[0] > 0:
-            place_pebbles(pos, vel, omega, clump, offset, alive, cpos, cvel, comega, ctheta)
+            place_pebbles(kin, clump, offset, alive, cpos, cvel, comega, ctheta)
         prm[P.DT] = dt_next
         if st != P.OK:
-            _write_back(fa, force, moment)
+            _write_back(kin, fa, pos, vel, omega, force, moment)
             return (st, k + 1, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)
-    _write_back(fa, force, moment)
+    _write_back(kin, fa, pos, vel, omega, force, moment)
     return (P.OK, nsteps, p_i, p_j, p_h, p_bond, p_fn, p_fs, w_i, w_s, w_h, w_fn, w_fs)
 
 
 @njit(cache=True, error_model="numpy")
-def _write_back(fa, force, moment):
+def _write_back(kin, fa, pos, vel, omega, force, moment):
     for i in range(force.shape[0]):
+        pos[i, 0] = kin[i, 0]
+        pos[i, 1] = kin[i, 1]
+        vel[i, 0] = kin[i, 2]
+        vel[i, 1] = kin[i, 3]
+        omega[i] = kin[i, 4]
         force[i, 0] = fa[i, 0]
         force[i, 1] = fa[i, 1]
         moment[i] = fa[i, 2]

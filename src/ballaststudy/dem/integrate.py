@@ -16,12 +16,12 @@ from .contacts import LC_E, LC_KAPPA
 
 
 @njit(cache=True, error_model="numpy")
-def first_half(dt, gx, gy, cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, iinv, rad, mat,
-               fix, clump, alive, pos0, clear, kin, cpos, cvel, comega, ctheta, cforce,
-               cmoment, cmass, cinertia, cheld):
-    """One pass per free ball: half kick (held dofs keep their velocity), drift, the
-    displacement since the last neighbour build, force reset to weight + external load,
-    and the packed row ``kin`` the pair loop reads. Then half kick + drift of clumps.
+def first_half(dt, gx, gy, cx, cy, wt, kin, fa, mass, fext, minv, iinv, fix, clump, alive,
+               pos0, clear, cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia, cheld):
+    """One pass per free ball over its packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m,
+    material) and force row ``fa`` = (fx, fy, mz): half kick (held dofs keep their
+    velocity), drift, the displacement since the last neighbour build, force reset to
+    weight + external load. Then half kick + drift of clumps.
 
     Verlet-list validity (exact, by the triangle inequality): a pair not listed had a
     gap > skin, and |dx_i - dx_j| <= |dx_i - c| + |dx_j - c| for ANY common vector c;
@@ -35,7 +35,7 @@ def first_half(dt, gx, gy, cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, ii
     sx = 0.0
     sy = 0.0
     cnt = 0
-    for i in range(pos.shape[0]):
+    for i in range(kin.shape[0]):
         if clump[i] >= 0:
             continue
         if not alive[i]:
@@ -45,15 +45,15 @@ def first_half(dt, gx, gy, cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, ii
             continue
         f = fix[i]
         if not (f & 1):
-            vel[i, 0] += h * fa[i, 0] * minv[i]
+            kin[i, 2] += h * fa[i, 0] * minv[i]
         if not (f & 2):
-            vel[i, 1] += h * fa[i, 1] * minv[i]
+            kin[i, 3] += h * fa[i, 1] * minv[i]
         if not (f & 4):
-            omega[i] += h * fa[i, 2] * iinv[i]
-        x = pos[i, 0] + dt * vel[i, 0]
-        y = pos[i, 1] + dt * vel[i, 1]
-        pos[i, 0] = x
-        pos[i, 1] = y
+            kin[i, 4] += h * fa[i, 2] * iinv[i]
+        x = kin[i, 0] + dt * kin[i, 2]
+        y = kin[i, 1] + dt * kin[i, 3]
+        kin[i, 0] = x
+        kin[i, 1] = y
         dx = x - pos0[i, 0]
         dy = y - pos0[i, 1]
         sx += dx
@@ -74,14 +74,6 @@ def first_half(dt, gx, gy, cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, ii
         fa[i, 0] = mass[i] * gx + fext[i, 0]
         fa[i, 1] = mass[i] * gy + fext[i, 1]
         fa[i, 2] = 0.0
-        kin[i, 0] = x
-        kin[i, 1] = y
-        kin[i, 2] = vel[i, 0]
-        kin[i, 3] = vel[i, 1]
-        kin[i, 4] = omega[i]
-        kin[i, 5] = rad[i]
-        kin[i, 6] = minv[i]
-        kin[i, 7] = mat[i]
     for c in range(cpos.shape[0]):
         if not cheld[c]:
             cvel[c, 0] += h * cforce[c, 0] / cmass[c]
@@ -94,15 +86,14 @@ def first_half(dt, gx, gy, cx, cy, wt, pos, vel, omega, fa, mass, fext, minv, ii
 
 
 @njit(cache=True, error_model="numpy")
-def pebbles_moved(cx, cy, wt, pos, vel, omega, fa, fext, minv, rad, mat, clump, alive, pos0,
-                  clear, kin, d1, d2, near_wall):
-    """After ``place_pebbles``: the same list checks, force reset (external load only:
-    the clump carries the weight) and packed rows for pebbles."""
-    for i in range(pos.shape[0]):
+def pebbles_moved(cx, cy, wt, kin, fa, fext, clump, alive, pos0, clear, d1, d2, near_wall):
+    """After ``place_pebbles``: the same list checks and force reset (external load only:
+    the clump carries the weight) for pebbles."""
+    for i in range(kin.shape[0]):
         if clump[i] < 0 or not alive[i]:
             continue
-        dx = pos[i, 0] - pos0[i, 0]
-        dy = pos[i, 1] - pos0[i, 1]
+        dx = kin[i, 0] - pos0[i, 0]
+        dy = kin[i, 1] - pos0[i, 1]
         rx = dx - cx
         ry = dy - cy
         dd = rx * rx + ry * ry
@@ -118,14 +109,6 @@ def pebbles_moved(cx, cy, wt, pos, vel, omega, fa, fext, minv, rad, mat, clump, 
         fa[i, 0] = fext[i, 0]
         fa[i, 1] = fext[i, 1]
         fa[i, 2] = 0.0
-        kin[i, 0] = pos[i, 0]
-        kin[i, 1] = pos[i, 1]
-        kin[i, 2] = vel[i, 0]
-        kin[i, 3] = vel[i, 1]
-        kin[i, 4] = omega[i]
-        kin[i, 5] = rad[i]
-        kin[i, 6] = minv[i]
-        kin[i, 7] = mat[i]
     return d1, d2, near_wall
 
 
@@ -156,7 +139,7 @@ def _damped(f, v, alpha):
 
 
 @njit(cache=True, error_model="numpy")
-def second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive, damp,
+def second_half(prm, kin, fa, minv, iinv, fix, clump, alive, damp,
                 cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp, eacc, err):
     """Local damping (per body: ``damp``, ``cdamp``; not on velocity-held dofs) + half
     kick; then the guards. Returns a status code and puts the offending ball id and
@@ -170,35 +153,35 @@ def second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive, damp,
     y0 = prm[P.YMIN]
     y1 = prm[P.YMAX]
     suspect = cvel.shape[0] > 0          # pebbles are not checked in the loop below
-    for i in range(pos.shape[0]):
+    for i in range(kin.shape[0]):
         if not alive[i] or clump[i] >= 0:
             continue
         f = fix[i]
         alpha = damp[i]
         if alpha > 0.0:
             if not (f & 1):
-                fx = _damped(fa[i, 0], vel[i, 0], alpha)
-                el -= (fx - fa[i, 0]) * vel[i, 0] * dt
+                fx = _damped(fa[i, 0], kin[i, 2], alpha)
+                el -= (fx - fa[i, 0]) * kin[i, 2] * dt
                 fa[i, 0] = fx
             if not (f & 2):
-                fy = _damped(fa[i, 1], vel[i, 1], alpha)
-                el -= (fy - fa[i, 1]) * vel[i, 1] * dt
+                fy = _damped(fa[i, 1], kin[i, 3], alpha)
+                el -= (fy - fa[i, 1]) * kin[i, 3] * dt
                 fa[i, 1] = fy
             if not (f & 4):
-                mz = _damped(fa[i, 2], omega[i], alpha)
-                el -= (mz - fa[i, 2]) * omega[i] * dt
+                mz = _damped(fa[i, 2], kin[i, 4], alpha)
+                el -= (mz - fa[i, 2]) * kin[i, 4] * dt
                 fa[i, 2] = mz
         if not (f & 1):
-            vel[i, 0] += h * fa[i, 0] * minv[i]
+            kin[i, 2] += h * fa[i, 0] * minv[i]
         if not (f & 2):
-            vel[i, 1] += h * fa[i, 1] * minv[i]
+            kin[i, 3] += h * fa[i, 1] * minv[i]
         if not (f & 4):
-            omega[i] += h * fa[i, 2] * iinv[i]
+            kin[i, 4] += h * fa[i, 2] * iinv[i]
         # guard pre-check, branch free; NaN fails every comparison
-        x = pos[i, 0]
-        y = pos[i, 1]
-        v2 = vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1]
-        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(omega[i]) < 1e300)
+        x = kin[i, 0]
+        y = kin[i, 1]
+        v2 = kin[i, 2] * kin[i, 2] + kin[i, 3] * kin[i, 3]
+        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(kin[i, 4]) < 1e300)
         if not ok:
             suspect = True
     for c in range(cvel.shape[0]):
@@ -219,12 +202,12 @@ def second_half(prm, pos, vel, omega, fa, minv, iinv, fix, clump, alive, damp,
         comega[c] += h * cmoment[c] / cinertia[c]
     eacc[P.E_LOCAL] += el
     if suspect:
-        return guards(prm, pos, vel, omega, alive, err)
+        return guards(prm, kin, alive, err)
     return P.OK
 
 
 @njit(cache=True, error_model="numpy")
-def guards(prm, pos, vel, omega, alive, err):
+def guards(prm, kin, alive, err):
     """NaN/Inf, runaway speed, ball outside the domain -> status code (params.py); the
     offending ball id and value go to err. One cheap pass: the slow path only on failure."""
     vmax2 = prm[P.VMAX] ** 2
@@ -233,30 +216,30 @@ def guards(prm, pos, vel, omega, alive, err):
     y0 = prm[P.YMIN]
     y1 = prm[P.YMAX]
     bad = -1
-    for i in range(pos.shape[0]):
-        x = pos[i, 0]
-        y = pos[i, 1]
-        v2 = vel[i, 0] * vel[i, 0] + vel[i, 1] * vel[i, 1]
+    for i in range(kin.shape[0]):
+        x = kin[i, 0]
+        y = kin[i, 1]
+        v2 = kin[i, 2] * kin[i, 2] + kin[i, 3] * kin[i, 3]
         # every comparison is False for NaN, so "not (inside)" catches NaN/Inf too
-        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(omega[i]) < 1e300)
+        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(kin[i, 4]) < 1e300)
         if not ok and alive[i]:
             bad = i
             break
     if bad < 0:
         return P.OK
     i = bad
-    s = pos[i, 0] + pos[i, 1] + vel[i, 0] + vel[i, 1] + omega[i]
+    s = kin[i, 0] + kin[i, 1] + kin[i, 2] + kin[i, 3] + kin[i, 4]
     if not math.isfinite(s):
         err[0] = i
         err[1] = s
         return P.NAN_FOUND
-    v2 = vel[i, 0] ** 2 + vel[i, 1] ** 2
+    v2 = kin[i, 2] ** 2 + kin[i, 3] ** 2
     if v2 > vmax2:
         err[0] = i
         err[1] = math.sqrt(v2)
         return P.RUNAWAY
     err[0] = i
-    err[1] = pos[i, 0] if (pos[i, 0] < x0 or pos[i, 0] > x1) else pos[i, 1]
+    err[1] = kin[i, 0] if (kin[i, 0] < x0 or kin[i, 0] > x1) else kin[i, 1]
     return P.LEFT_DOMAIN
 
 

@@ -16,7 +16,7 @@ from . import output
 from . import params as P
 from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
-from .clumps import mass_properties, place_pebbles
+from .clumps import mass_properties
 from .contacts import LC_E, LC_KAPPA, LC_NCOL
 from .engine import run_steps
 from .integrate import critical_dt, reset_forces
@@ -188,9 +188,12 @@ class Simulation:
         self.balls.clump[ids] = cid
         self.balls.offset[ids] = np.column_stack([x - cx, y - cy])
         self.balls.minv[ids] = 1.0 / m        # dashpot effective mass = clump mass
-        b, c = self.balls, self.clumps
-        place_pebbles(b.pos, b.vel, b.omega, b.clump, b.offset, b.alive, c.pos, c.vel,
-                      c.omega, c.theta)
+        # pebbles follow the clump (theta = 0 at creation)
+        off = self.balls.offset[ids]
+        self.balls.pos[ids] = (cx, cy) + off
+        self.balls.vel[ids] = np.asarray(vel, float) + omega * np.column_stack([-off[:, 1], off[:, 0]])
+        self.balls.omega[ids] = omega
+        self.balls.pos0[ids] = self.balls.pos[ids]
         return cid
 
     def set_clump_velocity(self, cid, vel=None, omega=None, held=None):

@@ -51,7 +51,7 @@ def _joint_elsewhere(px, py, seg, link, s, u):
 
 
 @njit(cache=True, error_model="numpy")
-def wall_forces(prm, pos, vel, omega, rad, minv, mat, fa,
+def wall_forces(prm, kin, rad, minv, mat, fa,
                 seg, wvel, womega, centre, wmat, link, wforce, wmoment,
                 w_i, w_s, w_h, w_fn, w_fs, nwp, lc, eacc):
     """Add ball-segment forces to the balls; record force and moment on each segment."""
@@ -68,12 +68,12 @@ def wall_forces(prm, pos, vel, omega, rad, minv, mat, fa,
     for q in range(nwp):
         i = w_i[q]
         s = w_s[q]
-        cx, cy, u = seg_closest(pos[i, 0], pos[i, 1], seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
-        dx = pos[i, 0] - cx
-        dy = pos[i, 1] - cy
+        cx, cy, u = seg_closest(kin[i, 0], kin[i, 1], seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+        dx = kin[i, 0] - cx
+        dy = kin[i, 1] - cy
         d2 = dx * dx + dy * dy
         r = rad[i]
-        if d2 >= r * r or d2 == 0.0 or _joint_elsewhere(pos[i, 0], pos[i, 1], seg, link, s, u):
+        if d2 >= r * r or d2 == 0.0 or _joint_elsewhere(kin[i, 0], kin[i, 1], seg, link, s, u):
             w_h[q, 0] = 0.0
             w_h[q, 1] = 0.0
             w_fn[q] = 0.0
@@ -89,8 +89,8 @@ def wall_forces(prm, pos, vel, omega, rad, minv, mat, fa,
         wx = wvel[s, 0] - womega[s] * (cy - centre[s, 1])
         wy = wvel[s, 1] + womega[s] * (cx - centre[s, 0])
         arm = r if law == P.LAW_HOOKE else r - 0.5 * delta
-        vrx = vel[i, 0] - wx - omega[i] * arm * tx
-        vry = vel[i, 1] - wy - omega[i] * arm * ty
+        vrx = kin[i, 2] - wx - kin[i, 4] * arm * tx
+        vry = kin[i, 3] - wy - kin[i, 4] * arm * ty
         vn = vrx * nx + vry * ny
         mc = 1.0 / minv[i]
         if law == P.LAW_HOOKE:
