@@ -64,7 +64,7 @@ class RigParams:
     snapshot_every: int = 10
     timeseries_every: int = 10
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
-    max_cycle_steps: int = 400000
+    max_cycle_steps: int = 5000000
 
     @classmethod
     def from_config(cls, section):
