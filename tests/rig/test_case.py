@@ -35,10 +35,13 @@ def test_static_force_balance(assembled, small_params):
     """At the end of static loading (30 kN reached), the loading ball held still: loading
     force + weight of the stones and the plate = bottom + side-wall vertical forces (side
     walls count with their sign: stones heaving at the walls are held down by friction)."""
-    run = LoadingRun(BoxRig.load(assembled[0]), cycles=1)
+    rig = BoxRig.load(assembled[0])
+    # proportional servo here: the PI servo (default) ends the static stage with the ball
+    # still moving, and this coarse case creeps, so the held-ball balance drifts by ~3 %
+    rig.params.servo_integral_steps = 0
+    run = LoadingRun(rig, cycles=1)
     while run.s["phase"] == "static":
         run.advance()
-    rig = run.rig
     means = run.s["static_mean"]
     assert len(means) == 3
     for m, t in zip(means, small_params.static_loads_kN):

@@ -95,9 +95,17 @@ class LoadingRun:
     def _velocity(self, f):
         p, s = self.rig.params, self.s
         if s["phase"] == "static":
+            # PI servo: the integral removes the offset a proportional servo keeps while
+            # the aggregate creeps (clamped: no wind-up beyond the speed limit)
             target = p.static_loads_kN[s["target"]] * KN
-            return float(np.clip(-p.servo_gain_m_s_per_kN * (target - f) / KN,
-                                 -p.servo_velocity_m_s, p.servo_velocity_m_s))
+            e = p.servo_gain_m_s_per_kN * (target - f) / KN
+            if p.servo_integral_steps > 0:
+                vmax = p.servo_velocity_m_s
+                s["servo_int"] = float(np.clip(
+                    s.get("servo_int", 0.0) + e * p.control_every / p.servo_integral_steps,
+                    -vmax, vmax))
+                e += s["servo_int"]
+            return float(np.clip(-e, -p.servo_velocity_m_s, p.servo_velocity_m_s))
         lo, hi = p.cyclic_min_kN * KN, p.cyclic_max_kN * KN
         bound = hi if s["direction"] < 0 else lo
         frac = np.clip(abs(bound - f) / (hi - lo), 0.0, 1.0)
@@ -141,6 +149,7 @@ class LoadingRun:
             s["static_mean"].append(mean)
             s["static_walls"].append(walls)     # mean bottom, side-wall vertical force
             s["target"] += 1
+            s["servo_int"] = 0.0
             s["windows"] = 0
             if s["target"] == len(p.static_loads_kN):
                 s["phase"] = "unload"

@@ -52,6 +52,7 @@ class RigParams:
     static_max_windows: int = 40
     servo_velocity_m_s: float = 0.05
     servo_gain_m_s_per_kN: float = 0.05
+    servo_integral_steps: int = 10000
     cyclic_min_kN: float = 15.0
     cyclic_max_kN: float = 45.0
     cyclic_v_max_m_s: float = 0.05
