@@ -19,8 +19,13 @@ RESULTS = config["results_dir"]
 
 
 include: "workflow/rules/forms.smk"
+include: "workflow/rules/bpm.smk"
+include: "workflow/rules/cases.smk"
+include: "workflow/rules/study.smk"
 
 
 rule all:
     input:
         rules.forms_report.output,
+        rules.study_iri.output,
+        rules.study_optimise.output,

@@ -1,5 +1,7 @@
 """The Snakemake workflow on a tiny study: runs, reruns only what a config edit touches,
-does nothing when nothing changed, and the SLURM profile passes a dry run."""
+does nothing when nothing changed, and the SLURM profile passes a dry run. The fast tests
+run the forms stage for real and the rest of the chain as a dry run; the slow test runs the
+whole chain on one database, one case, two cycles."""
 
 import contextlib
 import re
@@ -36,8 +38,10 @@ def study(tmp_path_factory):
     dbs["databases"] = {k: dbs["databases"][k] for k in ("G_1-5", "box_test")}
     (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    cfg["study"]["cases_per_database"] = 1
+    cfg["rig"]["cycles"] = 2
     (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
-    _snakemake(d)
+    _snakemake(d, "forms_report")
     return d
 
 
@@ -49,7 +53,13 @@ def test_first_run_makes_every_output(study):
 
 
 def test_rerun_with_nothing_changed_does_nothing(study):
-    assert "Nothing to be done" in _snakemake(study, "-n")
+    assert "Nothing to be done" in _snakemake(study, "-n", "forms_report")
+
+
+def test_whole_chain_is_planned(study):
+    jobs = _jobs(_snakemake(study, "-n"))
+    assert jobs == {"bpm_build": 2, "case_assemble": 2, "case_run": 2, "study_aggregate": 1,
+                    "study_iri": 1, "study_optimise": 1, "all": 1}, jobs
 
 
 @contextlib.contextmanager
@@ -68,14 +78,14 @@ def _edited(path, change):
 def test_editing_one_database_reruns_only_it(study):
     with _edited(study / "config" / "databases.yaml",
                  lambda d: d["databases"]["box_test"].update(shape_index=20)):
-        jobs = _jobs(_snakemake(study, "-n"))
+        jobs = _jobs(_snakemake(study, "-n", "forms_report"))
     assert jobs.get("forms_generate") == 1, jobs
     assert jobs.get("forms_report") == 1, jobs
 
 
 def test_editing_form_settings_reruns_every_database(study):
     with _edited(study / "config" / "config.yaml", lambda c: c["forms"].update(n_vertices=24)):
-        jobs = _jobs(_snakemake(study, "-n"))
+        jobs = _jobs(_snakemake(study, "-n", "forms_report"))
     assert jobs.get("forms_generate") == 2, jobs
 
 
@@ -90,3 +100,29 @@ def test_bad_config_is_rejected_before_any_job(study):
 def test_slurm_profile_dry_run(study):
     log = _snakemake(study, "-n", "--profile", "profiles/slurm", "--forceall")
     assert _jobs(log).get("forms_generate") == 2, log
+
+
+@pytest.mark.slow
+def test_whole_chain_runs_and_reruns_only_what_changed(tmp_path):
+    d = tmp_path
+    shutil.copy(ROOT / "Snakefile", d)
+    shutil.copytree(ROOT / "workflow", d / "workflow", symlinks=False)
+    (d / "config").mkdir()
+    dbs = yaml.safe_load((ROOT / "config" / "databases.yaml").read_text())
+    dbs["databases"] = {"box_test": dbs["databases"]["box_test"]}
+    (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
+    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    cfg["study"]["cases_per_database"] = 1
+    cfg["rig"]["cycles"] = 2
+    (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
+    _snakemake(d)
+    for out in ("results/study.nc", "results/study/iri/iri.csv", "results/study/report/report.md"):
+        assert (d / out).is_file(), out
+    assert "Nothing to be done" in _snakemake(d, "-n")
+    with _edited(d / "config" / "config.yaml", lambda c: c["rig"].update(cyclic_max_kN=40.0)):
+        jobs = _jobs(_snakemake(d, "-n"))
+    assert "case_assemble" not in jobs and jobs.get("case_run") == 1, jobs
+    assert jobs.get("study_aggregate") == 1, jobs
+    with _edited(d / "config" / "config.yaml", lambda c: c["rig"].update(plate_width_m=0.28)):
+        jobs = _jobs(_snakemake(d, "-n"))
+    assert jobs.get("case_assemble") == 1 and jobs.get("case_run") == 1 and "bpm_build" not in jobs, jobs

@@ -5,6 +5,16 @@
 import json
 
 CASES = list(range(int(config.get("study", {}).get("cases_per_database", 10))))
+# rig keys that only the loading stage reads: editing them reruns the case runs, not the assembly
+LOADING_KEYS = ("static_", "servo_", "cyclic_", "settlement_force_kN", "cycles", "control_every",
+                "loading_dt_factor", "checkpoint_every", "snapshot_every", "timeseries_every",
+                "vtk_cycles", "max_cycle_steps")
+
+
+def rig_params(loading):
+    """JSON of the assembly (loading=False) or loading (True) part of config['rig']."""
+    rig = config.get("rig", {})
+    return json.dumps({k: v for k, v in rig.items() if k.startswith(LOADING_KEYS) == loading}, sort_keys=True)
 
 
 rule case_assemble:
@@ -13,7 +23,7 @@ rule case_assemble:
     output:
         f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
     params:
-        rig=json.dumps(config.get("rig", {}), sort_keys=True),   # editing rig: reassemble
+        rig=rig_params(loading=False),   # editing an assembly key: reassemble
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/cases/{{db}}/case{{case}}_assemble.log",
@@ -30,6 +40,8 @@ rule case_run:
         case_png=f"{RESULTS}/cases/{{db}}/case{{case}}/case.png",
         curves=f"{RESULTS}/cases/{{db}}/case{{case}}/behaviours.png",
     params:
+        loading=rig_params(loading=True),   # editing a loading or metrics key: rerun the loading
+        metrics=json.dumps(config.get("metrics", {}), sort_keys=True),
         cycles=config.get("rig", {}).get("cycles", 1000),
         config=CONFIG_FILE,
     log:
