@@ -72,7 +72,7 @@ class LoadingRun:
         self.cycles = int(cycles)
         self.checkpoint = checkpoint
         self.checkpoint_every = int(checkpoint_every or p.checkpoint_every)
-        self.s = dict(phase="static", target=0, win_sum=0.0, win_n=0, win_steps=0,
+        self.s = dict(phase="static", touched=False, target=0, win_sum=0.0, win_n=0, win_steps=0,
                       windows=0, direction=-1, cycle=0, f_prev=0.0, y_prev=0.0,
                       cyc_start=0, fmax=-1e300, fmin=1e300, y30=float("nan"),
                       peak=None, log0=int(rig.sim.log.n[0]), step0=rig.sim.step,
@@ -132,6 +132,17 @@ class LoadingRun:
 
     def _static(self, f, y):
         p, s = self.rig.params, self.s
+        if not s["touched"]:
+            # approach: the ball travels down at the servo's top speed until it presses the
+            # plate (5 % of the first load); the 10,000-step windows count from that contact,
+            # so a plate still settling under its own weight does not use them up
+            if f < 0.05 * p.static_loads_kN[0] * KN:
+                s["approach_steps"] = s.get("approach_steps", 0) + p.control_every
+                if s["approach_steps"] > p.static_max_windows * p.static_window_steps:
+                    raise RuntimeError(f"the loading ball did not reach the plate within "
+                                       f"{s['approach_steps']} steps")
+                return
+            s["touched"] = True
         s["win_sum"] += f
         s["win_bottom"] += float(self.rig.bottom_forces().sum())
         s["win_side"] += float(-self.rig.side_forces()[:, 1].sum())
