@@ -3,7 +3,7 @@
 # Config: config/config.yaml (or --configfile), validated by workflow/schemas/ at start.
 from snakemake.utils import min_version, validate
 
-from ballaststudy.config import database_seed, form_params, load_databases, select_databases
+from ballaststudy.config import check_domain, database_seed, validate as validate_file, form_params, load_databases, select_databases
 
 min_version("8.0")
 
@@ -11,8 +11,11 @@ min_version("8.0")
 configfile: "config/config.yaml"
 
 
-validate(config, "workflow/schemas/config.schema.yaml")
 CONFIG_FILE = (workflow.overwrite_configfiles or ["config/config.yaml"])[-1]
+# our one-line message (file, key, allowed range) first, then Snakemake's own validation
+# against the same schema (it also fills the defaults)
+check_domain(validate_file(config, "config", CONFIG_FILE), CONFIG_FILE)
+validate(config, "workflow/schemas/config.schema.yaml")
 DATABASES = load_databases(config["databases_file"], form_params(config))
 NAMES = select_databases(config, DATABASES, CONFIG_FILE)
 RESULTS = config["results_dir"]

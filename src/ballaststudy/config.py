@@ -90,6 +90,22 @@ def load_config(path):
     if cfg.get("forms") is None:
         cfg["forms"] = {}
     _fill_defaults(cfg["forms"], yaml.safe_load(schema_path("config").read_text())["properties"]["forms"])
+    return check_domain(cfg, path)
+
+
+def check_domain(cfg, file):
+    """Checks across keys that a schema cannot state; ConfigError naming key and range."""
+    rig = cfg.get("rig") or {}
+    lo, hi = rig.get("cyclic_min_kN"), rig.get("cyclic_max_kN")
+    if lo is not None and hi is not None and not lo < hi:
+        raise ConfigError(file, "rig.cyclic_min_kN", f"{lo:g} kN must be below rig.cyclic_max_kN ({hi:g} kN)")
+    loads = rig.get("static_loads_kN") or []
+    if any(b <= a for a, b in zip(loads, loads[1:])):
+        raise ConfigError(file, "rig.static_loads_kN", f"{loads} must increase step by step")
+    bpm = cfg.get("bpm") or {}
+    rmin, rmax = bpm.get("radius_min_mm"), bpm.get("radius_max_mm")
+    if rmin is not None and rmax is not None and not rmin <= rmax:
+        raise ConfigError(file, "bpm.radius_min_mm", f"{rmin:g} mm must not exceed bpm.radius_max_mm ({rmax:g} mm)")
     return cfg
 
 

@@ -89,12 +89,17 @@ def test_editing_form_settings_reruns_every_database(study):
     assert jobs.get("forms_generate") == 2, jobs
 
 
-def test_bad_config_is_rejected_before_any_job(study):
-    with _edited(study / "config" / "databases.yaml",
-                 lambda d: d["databases"]["G_1-5"].update(mass_kg=-1)):
+@pytest.mark.parametrize("file, change, key", [
+    ("databases.yaml", lambda d: d["databases"]["G_1-5"].update(mass_kg=-1), "databases.G_1-5.mass_kg"),
+    ("config.yaml", lambda c: c["rig"].update(cycles=-5), "rig.cycles"),
+    ("config.yaml", lambda c: c.update(databases=["G_9-9"]), "databases"),
+    ("config.yaml", lambda c: c["rig"].update(cyclic_min_kN=50.0), "rig.cyclic_min_kN"),
+])
+def test_bad_config_is_rejected_before_any_job(study, file, change, key):
+    with _edited(study / "config" / file, change):
         out = subprocess.run(["snakemake", "--cores", "1", "-n"], cwd=study, capture_output=True, text=True)
     assert out.returncode != 0
-    assert "databases.G_1-5.mass_kg" in out.stdout + out.stderr
+    assert f"{file}: {key}" in out.stdout + out.stderr, out.stdout + out.stderr
 
 
 def test_slurm_profile_dry_run(study):
