@@ -1,4 +1,5 @@
 """`ballaststudy case assemble|run` end to end on the small case, with an interruption."""
+import json
 from pathlib import Path
 
 import pytest
@@ -40,6 +41,10 @@ def test_case_cli_with_resume(small_library, small_config, tmp_path, capsys):
     for name in ("case.png", "behaviours.png"):
         assert out.with_name(name).stat().st_size > 1000
     assert sorted(p.name for p in out.with_name("vtk").iterdir())[:1] == ["balls_cycle00000.vtp"]
+    # provenance beside both outputs, the run's record naming the assembled case as its input
+    run_record = json.loads(out.with_name("metrics.nc.prov.json").read_text())
+    assert str(asm) in run_record["inputs"] and run_record["step"] == "case run"
+    assert json.loads(asm.with_name("assembled.nc.prov.json").read_text())["step"] == "case assemble"
 
 
 def test_bad_library_is_one_clear_error(small_config, tmp_path, capsys):

@@ -12,6 +12,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..config import ConfigError, load_config
+from ..provenance import Recorder
 from .params import RigParams, case_seed
 
 
@@ -29,6 +30,8 @@ def _case_assemble(args):
     except LibraryError as err:
         raise ConfigError(args.library, None, str(err)) from None
     seed = args.seed if args.seed is not None else case_seed(cfg["seed"], lib.database, args.case)
+    recorder = Recorder("case assemble", inputs=(args.library, args.config),
+                        params={"case": args.case, "rig": params.to_dict()}, seed=seed)
     t0 = time.time()
     bar = tqdm(desc=f"assemble {lib.database} case {args.case}", unit="step", disable=args.quiet,
                unit_scale=True)
@@ -36,6 +39,8 @@ def _case_assemble(args):
     bar.close()
     rig.save(args.out, attrs={"case": args.case, "library_file": str(args.library),
                               "assembly_seconds": round(time.time() - t0, 1)})
+    recorder.finish()
+    recorder.write_beside(args.out)
     lay = rig.layout
     if not args.quiet:
         print(f"wrote {args.out}: {len(lay.stone_library_index)} stones, "
@@ -50,6 +55,9 @@ def _case_run(args):
     out = Path(args.out)
     ckpt = out.with_name(out.stem + ".checkpoint.npz")
     cfg, params = _params(args)
+    recorder = Recorder("case run", inputs=(args.assembled, args.config),
+                        params={"cycles": args.cycles, "rig": params.to_dict(),
+                                "metrics": cfg.get("metrics")})
     if ckpt.exists() and not args.restart:
         run = LoadingRun.from_checkpoint(ckpt, cycles=args.cycles,
                                          checkpoint_every=args.checkpoint_every)
@@ -93,6 +101,8 @@ def _case_run(args):
         return
     write_outputs(run, out, figures=not args.no_figures,
                   attrs={"assembled_file": str(args.assembled)})
+    recorder.finish()
+    recorder.write_beside(out)
     if not args.quiet:
         print(f"wrote {out}")
 
