@@ -84,6 +84,16 @@ def _study_optimise(args):
                            lambda: write_report(study, args.out, args.resamples, args.seed, str(args.study)))
 
 
+def _analysis_parser(actions, name, help_text):
+    """An action reading STUDY.nc into an output folder with seeded bootstrap intervals."""
+    p = actions.add_parser(name, help=help_text)
+    p.add_argument("study", type=Path, metavar="STUDY.nc")
+    p.add_argument("--out", required=True, type=Path, help="output folder")
+    p.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (>= 100)")
+    p.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    return p
+
+
 def register(subparsers):
     """Add the `study` stage (actions aggregate, iri, optimise) to `subparsers`."""
     st = subparsers.add_parser("study", help="aggregate metrics to study.nc, IRI tables, optimisation (thesis ch. 5)")
@@ -99,18 +109,10 @@ def register(subparsers):
                    help="override a database's group (default: forms attribute 'group', else G_<group>-<i>)")
     a.set_defaults(func=_study_aggregate)
 
-    i = ss.add_parser("iri", help="IRI tables like thesis Table 5-2: CSV, Markdown, heatmap")
-    i.add_argument("study", type=Path, metavar="STUDY.nc")
-    i.add_argument("--out", required=True, type=Path, help="output folder")
-    i.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (>= 100)")
-    i.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    i = _analysis_parser(ss, "iri", "IRI tables like thesis Table 5-2: CSV, Markdown, heatmap")
     i.add_argument("--min-rho", type=float, default=0.3, help="smallest |Spearman rho| for a verdict other than none")
     i.set_defaults(func=_study_iri)
 
-    o = ss.add_parser("optimise", help="ranking, Pareto set, recommendation, thesis findings, Figs. 5-1 ... 5-6")
-    o.add_argument("study", type=Path, metavar="STUDY.nc")
-    o.add_argument("--out", required=True, type=Path, help="output folder")
-    o.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (>= 100)")
-    o.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    o = _analysis_parser(ss, "optimise", "ranking, Pareto set, recommendation, thesis findings, Figs. 5-1 ... 5-6")
     o.set_defaults(func=_study_optimise)
     return st
