@@ -87,11 +87,19 @@ def test_region_clips_at_plate_bottom():
     assert out["void_ratio"] == pytest.approx(1 - solid / a, rel=1e-3)
 
 
+def lens_area(d, r=R):
+    return 2 * r * r * math.acos(d / (2 * r)) - 0.5 * d * math.sqrt(4 * r * r - d * d)
+
+
 def test_pore_enclosed_by_several_stones_stays_void():
-    # four separate bars (no bonds between them) framing a square pore; at each corner the
-    # end balls of two bars coincide, so the frame is closed and the pore a hole of the union
-    row = lambda x0, y0, dx, dy: [(x0 + i * dx, y0 + i * dy) for i in range(9)]
-    parts = [row(0, 0, 2 * R, 0), row(0, 16 * R, 2 * R, 0), row(0, 0, 0, 2 * R), row(16 * R, 0, 0, 2 * R)]
+    # four separate bars (no bonds between them) framing a square pore: two bars of 9 balls
+    # (x 0 .. 16R at y 0 and 16R) and two of 7 between their end balls, overlapping them by
+    # delta (a contact); the pore enclosed by the four stones must stay void
+    delta = 0.02 * R
+    s7 = (12 * R + 2 * delta) / 6
+    row = lambda x0, y0, dx, dy, k: [(x0 + i * dx, y0 + i * dy) for i in range(k)]
+    parts = [row(0, 0, 2 * R, 0, 9), row(0, 16 * R, 2 * R, 0, 9),
+             row(0, 2 * R - delta, 0, s7, 7), row(16 * R, 2 * R - delta, 0, s7, 7)]
     pos, bi, bj, start = [], [], [], 0
     for p in parts:
         pos += p
@@ -102,9 +110,8 @@ def test_pore_enclosed_by_several_stones_stays_void():
     rad = np.full(len(pos), R)
     bi, bj = np.array(bi), np.array(bj)
     out = _vr(pos, rad, bi, bj, np.ones(len(bi), bool), (0.0, 0.3, 0.0, 0.3))
-    stadium = 4 * R * R * 8 + math.pi * R * R
-    corner = R * R * (1 + 3 * math.pi / 4)       # overlap of two stadia sharing an end disk
-    expected = 4 * stadium - 4 * corner           # the 14R x 14R pore stays void
+    stadium = lambda length: length * 2 * R + math.pi * R * R
+    expected = 2 * stadium(16 * R) + 2 * stadium(6 * s7) - 4 * lens_area(2 * R - delta)
     assert out["area_solid"] == pytest.approx(expected, rel=REL), \
         f"solid measured {out['area_solid']}, expected {expected} (pore between stones filled?)"
 
@@ -119,3 +126,79 @@ def test_broken_stone_opens_its_crack():
     broken = _vr(pos, rad, bi, bj, np.array([False]), box)["area_solid"]
     assert whole == pytest.approx(2.4 * R * 2 * R + math.pi * R * R, rel=REL), f"measured {whole}"
     assert broken == pytest.approx(2 * math.pi * R * R, rel=REL), f"measured {broken}"
+
+
+def packed_stones(seed=0, overlap=0.01):
+    """A 5 x 4 grid of hexagonal 7-ball stones, randomly turned, neighbours overlapping
+    by ``overlap`` R along the grid lines (a jammed-like packing with real contacts)."""
+    rng = np.random.default_rng(seed)
+    base, rad0, bi0, bj0 = hex_stone(2)
+    pitch = 6 * R * (1 - overlap / 6)            # hexagon extent 6R along x through two balls
+    pos, rad, bi, bj = [], [], [], []
+    for gx in range(5):
+        for gy in range(4):
+            th = rng.choice([0.0, np.pi / 3]) + rng.normal(0, 0.01)
+            c, s = np.cos(th), np.sin(th)
+            p = base @ np.array([[c, s], [-s, c]]) + [0.04 + gx * pitch, 0.04 + gy * pitch]
+            bi.append(bi0 + len(pos) * 7)
+            bj.append(bj0 + len(pos) * 7)
+            pos.append(p)
+            rad.append(rad0)
+    return np.vstack(pos), np.concatenate(rad), np.concatenate(bi), np.concatenate(bj)
+
+
+def test_fast_areas_match_the_full_union():
+    """Sum of solids minus inter-stone lenses (and the analytic disks) against the shapely
+    union of everything clipped to the region, with the plate level cutting a row."""
+    import shapely
+    pos, rad, bi, bj = packed_stones()
+    intact = np.ones(len(bi), bool)
+    box = (0.0, 0.4, 0.0, 0.04 + 3.2 * 6 * R)       # the top row crosses the plate level
+    n, lab = fragments(len(rad), bi, bj, intact)
+    out = void_ratio(pos, rad, lab, n, bi, bj, intact, *box)
+    region = shapely.box(box[0], box[2], box[1], box[3])
+    solids = [stone_solid(pos[lab == f], rad[lab == f], *_local_bonds(lab, f, bi, bj)) for f in range(n)]
+    ref_solid = shapely.intersection(shapely.union_all(solids), region).area
+    disks = shapely.buffer(shapely.points(pos), rad, quad_segs=64)
+    ref_balls = shapely.intersection(shapely.union_all(disks), region).area
+    assert out["area_solid"] == pytest.approx(ref_solid, rel=1e-3)
+    assert (1 - out["void_ratio_balls"]) * region.area == pytest.approx(ref_balls, rel=1e-3)
+
+
+def _local_bonds(lab, f, bi, bj):
+    ids = np.nonzero(lab == f)[0]
+    loc = {g: k for k, g in enumerate(ids)}
+    keep = (lab[bi] == f) & (lab[bj] == f)
+    return np.array([loc[g] for g in bi[keep]]), np.array([loc[g] for g in bj[keep]])
+
+
+def test_cache_reuses_rigid_stones_and_rebuilds_deformed_ones():
+    from ballaststudy.metrics.void_ratio import SolidCache
+    pos, rad, bi, bj = packed_stones(overlap=0.0)
+    intact = np.ones(len(bi), bool)
+    box = (-1.0, 1.0, -1.0, 1.0)
+    n, lab = fragments(len(rad), bi, bj, intact)
+    cache = SolidCache(tolerance=1e-6)
+    first = void_ratio(pos, rad, lab, n, bi, bj, intact, *box, cache=cache)
+    assert cache.builds == n and cache.hits == 0
+    th = 0.3                                     # the whole packing turned and shifted
+    rot = np.array([[np.cos(th), np.sin(th)], [-np.sin(th), np.cos(th)]])
+    moved = pos @ rot + [0.01, -0.02]
+    again = void_ratio(moved, rad, lab, n, bi, bj, intact, *box, cache=cache)
+    assert cache.hits == n and cache.builds == n
+    assert again["area_solid"] == pytest.approx(first["area_solid"], rel=1e-12)
+    bent = moved.copy()
+    bent[lab == 0] += np.random.default_rng(1).normal(0, 1e-4, (7, 2))   # one stone deformed
+    void_ratio(bent, rad, lab, n, bi, bj, intact, *box, cache=cache)
+    assert cache.builds == n + 1
+
+
+def test_lens_and_cut_disk_against_polygons():
+    import shapely
+    from ballaststudy.metrics.void_ratio import _disk_area_below, _lens
+    a, b = shapely.Point(0, 0).buffer(1.0, 256), shapely.Point(1.3, 0).buffer(0.7, 256)
+    assert _lens(np.array(1.3), 1.0, 0.7) == pytest.approx(a.intersection(b).area, rel=1e-4)
+    assert _lens(np.array(0.1), 1.0, 0.7) == pytest.approx(np.pi * 0.49)
+    cut = a.intersection(shapely.box(-2, -2, 2, 0.4)).area
+    assert _disk_area_below(np.array(0.0), 1.0, 0.4) == pytest.approx(cut, rel=1e-4)
+    assert _disk_area_below(np.array(5.0), 1.0, 0.4) == 0.0

@@ -31,14 +31,17 @@ def test_assembly(assembled, small_params):
     assert again.layout.plate == lay.plate and again.layout.loading == lay.loading
 
 
-def test_static_force_balance(assembled, small_params):
-    """At the end of static loading (30 kN reached), the loading ball held still: loading
-    force + weight of the stones and the plate = bottom + side-wall vertical forces (side
-    walls count with their sign: stones heaving at the walls are held down by friction)."""
+STEPS = 300     # the held ball unloads as the packing flows away from it: a short window
+
+
+def test_static_loads_and_momentum_balance(assembled, small_params):
+    """The three static targets are met (10,000-step-style window means within 2.5 %); then,
+    with the loading ball held and local damping off (it is a force on every body from
+    outside), Newton's second law for stones + plate over 300 steps, step by step:
+    mean(loading force + weight - forces on all walls) = change of momentum / time, within
+    0.5 % of the load (measured: 0.01 %). (The static balance alone - without the momentum term - is off by
+    up to ~20 % here, because this coarse packing still flows at the end of static loading.)"""
     rig = BoxRig.load(assembled[0])
-    # proportional servo here: the PI servo (default) ends the static stage with the ball
-    # still moving, and this coarse case creeps, so the held-ball balance drifts by ~3 %
-    rig.params.servo_integral_steps = 0
     run = LoadingRun(rig, cycles=1)
     while run.s["phase"] == "static":
         run.advance()
@@ -46,17 +49,28 @@ def test_static_force_balance(assembled, small_params):
     assert len(means) == 3
     for m, t in zip(means, small_params.static_loads_kN):
         assert abs(m - 1e3 * t) / (1e3 * t) < small_params.static_tolerance
-    rig.sim.set_clump_velocity(rig.layout.loading, vel=(0.0, 0.0), held=True)
-    rig.sim.run(200)
-    weight = rig.weight() - rig.sim.clumps.mass[rig.layout.loading] * rig.params.gravity_m_s2
-    lhs, rhs = [], []
-    for _ in range(50):
-        rig.sim.run(20)
-        lhs.append(rig.loading_force() + weight)
-        rhs.append(rig.bottom_forces().sum() - rig.side_forces()[:, 1].sum())
-    lhs, rhs = np.mean(lhs), np.mean(rhs)
-    assert lhs > 0.5 * 1e3 * small_params.static_loads_kN[-1]
-    assert abs(lhs - rhs) / lhs < 0.02, f"plate load + weight {lhs:.1f} N, walls {rhs:.1f} N"
+    sim, lay = rig.sim, rig.layout
+    b, c = sim.balls, sim.clumps
+    sim.set_clump_velocity(lay.loading, vel=(0.0, 0.0), omega=0.0, held=True)
+    sim.set_damping(alpha=0.0, clump_alpha=0.0)
+    stones = rig.stone_balls()
+    g = rig.params.gravity_m_s2
+    weight = (b.mass[stones].sum() + c.mass[lay.plate]) * g
+
+    def momentum():                       # inertial masses (density scaling raises them)
+        return (b.vel[stones, 1] / b.minv[stones]).sum() + c.mass[lay.plate] * c.vel[lay.plate, 1]
+
+    p0, t0, net, loads = momentum(), sim.time, [], []
+    for _ in range(STEPS):
+        sim.run(1)
+        walls = sim.wall_force()[:, 1].sum()          # force of the balls on the walls, y
+        loads.append(rig.loading_force())
+        net.append(-loads[-1] - weight - walls)
+    rate = (momentum() - p0) / (sim.time - t0)
+    load = np.mean(loads) + weight
+    assert load > 0.5 * 1e3 * small_params.static_loads_kN[-1]
+    assert abs(np.mean(net) - rate) < 0.005 * load, \
+        f"sum of forces {np.mean(net):.1f} N, momentum rate {rate:.1f} N, load {load:.1f} N"
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,6 @@
 # Stage 4: the study (thesis ch. 5): per-case metrics -> study.nc -> IRI tables and the
 # optimisation report with the thesis' findings checked.
+from ballaststudy.study.plots import figure_names
 
 
 rule study_aggregate:
@@ -38,6 +39,8 @@ rule study_optimise:
         md=report(f"{RESULTS}/study/report/report.md", caption="../report/optimise.rst", category="Study"),
         ranking=f"{RESULTS}/study/report/ranking.csv",
         findings=f"{RESULTS}/study/report/findings.csv",
+        figures=report([f"{RESULTS}/study/report/{name}" for name in figure_names()],
+                       caption="../report/figures.rst", category="Study"),
     params:
         resamples=config["study"]["bootstrap_resamples"],
         seed=config["study"]["bootstrap_seed"],

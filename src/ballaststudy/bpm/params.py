@@ -11,7 +11,7 @@ MATERIAL_NAMES = ("hard", "soft")     # = the forms file's material flag_meaning
 
 @dataclass(frozen=True)
 class BpmParams:
-    """All lengths in m. Defaults = config/config.yaml (see the comments there)."""
+    """All lengths in m. Defaults = config/thesis.yaml (see the comments there)."""
     radius_min: float = 2.5e-3           # ball radius range of a stone large enough
     radius_max: float = 5.0e-3
     min_balls: int = 10                  # fewest balls a stone should have
@@ -24,7 +24,7 @@ class BpmParams:
     damping: float = 0.7                 # PFC local damping (material-genesis default)
     packing_friction: float = 0.0        # ball-ball and ball-wall friction while confined
     thickness: float = 1.0               # out-of-plane thickness t (PFC2D)
-    max_stones: int | None = 300         # None = every stone of the forms file
+    max_stones: int | None = None        # None = every stone of the forms file
     batch_balls: int = 1500              # balls per side-by-side simulation
     throw_tries: int = 16                # candidate centres per thrown-in ball
 

@@ -46,6 +46,7 @@ class MetricsParams:
     container_tolerance: float = 0.5e-3     # [m] geometric "touches the container"
     shoulder_depth: float = 0.02            # [m] shoulder = centroid above plate bottom - this
     disk_quad_segs: int = 16                # disk polygons: 4 * quad_segs sides
+    solid_reuse_tolerance: float = 1e-5     # [m] rigid-fit residual up to which a stone's solid area is reused
 
     @classmethod
     def from_config(cls, cfg=None):
@@ -53,7 +54,8 @@ class MetricsParams:
         conv = {"settlement_force_kN": ("settlement_force", 1e3),
                 "contact_force_threshold_N": ("contact_force_threshold", 1.0),
                 "container_contact_tolerance_mm": ("container_tolerance", 1e-3),
-                "shoulder_depth_mm": ("shoulder_depth", 1e-3)}
+                "shoulder_depth_mm": ("shoulder_depth", 1e-3),
+                "solid_reuse_tolerance_mm": ("solid_reuse_tolerance", 1e-3)}
         kw = {}
         names = {f.name for f in fields(cls)}
         for key, value in cfg.items():
@@ -90,12 +92,13 @@ SNAPSHOT_KEYS = {
 }
 
 
-def compute_cycle(snapshot, params=MetricsParams(), y_reference=None):
+def compute_cycle(snapshot, params=MetricsParams(), y_reference=None, solid_cache=None):
     """Every per-cycle behaviour from one snapshot dict (keys: ``SNAPSHOT_KEYS``).
 
     y_reference: the loading ball's y at the settlement force in cycle 0 [m], i.e. the
         ``y_at_level`` this function returned for cycle 0. None means "this is cycle 0"
         (settlement 0 by definition).
+    solid_cache: a ``void_ratio.SolidCache`` kept by the caller between cycles, or None.
     Returns a dict of scalars named like the variables of ``output.VARIABLES``.
     """
     s = snapshot
@@ -130,7 +133,7 @@ def compute_cycle(snapshot, params=MetricsParams(), y_reference=None):
     # void ratio (eq. 4.10)
     vr = void_ratio(pos, rad, labels, nf, s["bond_i"], s["bond_j"], s["bond_intact"],
                     g.container_x_min, g.container_x_max, g.container_y_bottom, g.plate_bottom_y,
-                    p.disk_quad_segs)
+                    p.disk_quad_segs, solid_cache)
     out.update(void_ratio=vr["void_ratio"], void_ratio_e=vr["void_ratio_e"],
                void_ratio_balls=vr["void_ratio_balls"])
 

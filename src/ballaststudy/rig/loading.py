@@ -9,9 +9,11 @@ on it (``BoxRig.loading_force``):
   ``static_window_steps`` the mean of the sampled force over the window is compared with
   the target; relative error < static_tolerance -> next target.
 * cyclic: the ball moves down until F >= F_max, then up until F <= F_min (velocity
-  reversed at each bound); its speed falls linearly from v_max right after a reversal to
-  v_min at the bound it approaches, so it does not strike the stones. A cycle runs from
-  one reversal at F_min to the next; before the first one the ball unloads from 30 kN.
+  reversed at each bound); it moves at v_max until the force is within
+  ``cyclic_braking_fraction`` of the load range of the bound it approaches, then its
+  speed falls linearly to v_min at that bound, so it does not strike the stones. A cycle
+  runs from one reversal at F_min to the next; before the first one the ball unloads
+  from 30 kN.
 
 2D forces are per thickness t (PFC2D): the thesis applies 10-45 kN to its 2D model
 directly, and so does this rig (a 30 kN load on a t = 1 m slice).
@@ -64,9 +66,11 @@ def set_density_scaling(sim, dt):
 class LoadingRun:
     """The loading state machine of one case. ``advance()`` = one control step."""
 
-    def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None):
+    def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
+                 resumed=False):
         """``metrics``: the config's ``metrics:`` section (dict) for the behaviours computed
-        at the end of every cycle by ``ballaststudy.metrics`` (None = its defaults)."""
+        at the end of every cycle by ``ballaststudy.metrics`` (None = its defaults).
+        ``resumed``: the engine comes from a checkpoint, its loading timestep already set."""
         p = rig.params
         self.rig = rig
         self.cycles = int(cycles)
@@ -87,9 +91,18 @@ class LoadingRun:
         self.snap_cycles, self.snap_pos, self.snap_frag = [], [], []
         self.snap_contacts = []
         self.hooks = []      # callables(run, cycle) at the end of each cycle (VTK...)
+        self._metrics_setup()
         self._ckpt_due = False
-        if p.loading_dt_factor > 1.0:
+        if p.loading_dt_factor > 1.0 and not resumed:
             set_density_scaling(rig.sim, p.loading_dt_factor * rig.sim.dt)
+
+    def _metrics_setup(self):
+        from ..metrics import MetricsParams
+        from ..metrics.void_ratio import SolidCache
+        self.metrics_params = MetricsParams.from_config(self.s["metrics_cfg"])
+        # stone solids reused between cycles; emptied at every checkpoint cycle so that a
+        # resumed run computes what an uninterrupted one does
+        self.solid_cache = SolidCache(self.metrics_params.solid_reuse_tolerance)
 
     # --------------------------------------------------------------- control law
     def _velocity(self, f):
@@ -108,7 +121,7 @@ class LoadingRun:
             return float(np.clip(-e, -p.servo_velocity_m_s, p.servo_velocity_m_s))
         lo, hi = p.cyclic_min_kN * KN, p.cyclic_max_kN * KN
         bound = hi if s["direction"] < 0 else lo
-        frac = np.clip(abs(bound - f) / (hi - lo), 0.0, 1.0)
+        frac = min(1.0, abs(bound - f) / (p.cyclic_braking_fraction * (hi - lo)))
         v = p.cyclic_v_min_m_s + (p.cyclic_v_max_m_s - p.cyclic_v_min_m_s) * frac
         return float(s["direction"] * v)
 
@@ -242,6 +255,8 @@ class LoadingRun:
         s["cycle"] += 1
         if s["cycle"] >= self.cycles:
             s["phase"] = "done"
+        if s["cycle"] % self.checkpoint_every == 0:
+            self.solid_cache.clear()
         if self.checkpoint and (s["cycle"] % self.checkpoint_every == 0
                                 or s["phase"] == "done"):
             self._ckpt_due = True      # saved once this control step is complete
@@ -306,16 +321,12 @@ class LoadingRun:
             cycle_start_step=int(s["cyc_start"]), cycle_end_step=int(sim.step) + 1)
 
     def behaviours(self):
-        """This cycle's behaviours from ``ballaststudy.metrics`` (JSON-safe dict; {} when
-        the package is not installed)."""
-        try:
-            from ..metrics import MetricsParams, compute_cycle
-        except ImportError:
-            return {}
+        """This cycle's behaviours from ``ballaststudy.metrics`` (JSON-safe dict)."""
+        from ..metrics import compute_cycle
         rows = self.s["rows"]
         ref = rows[0].get("y_at_level") if rows else None
-        out = compute_cycle(self.snapshot(), MetricsParams.from_config(self.s["metrics_cfg"]),
-                            y_reference=ref)
+        out = compute_cycle(self.snapshot(), self.metrics_params, y_reference=ref,
+                            solid_cache=self.solid_cache)
         return {k: (float(v) if isinstance(v, (float, np.floating)) else int(v))
                 for k, v in out.items()}
 
@@ -374,8 +385,9 @@ class LoadingRun:
         rig = BoxRig(sim, RigLayout(**json.loads(str(d["layout"]))),
                      RigParams(**json.loads(str(d["params"]))))
         run = cls(rig, int(d["cycles"]) if cycles is None else cycles, checkpoint=path,
-                  checkpoint_every=checkpoint_every)
+                  checkpoint_every=checkpoint_every, resumed=True)
         run.s = json.loads(str(d["state"]))
+        run._metrics_setup()
         if run.s["phase"] == "done" and run.s["cycle"] < run.cycles:
             run.s["phase"] = "cyclic"      # more cycles asked for than were run
             run._start_cycle()

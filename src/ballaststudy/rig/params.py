@@ -1,6 +1,7 @@
 """Rig parameters: the ``rig:`` section of the config, with the thesis' numbers where it
 gives them (4.1, 4.2.2, 4.2.3) and defended choices where it does not (see
-config/config.yaml for the reason of each). Units are SI unless the key names one."""
+config/thesis.yaml for the reason of each; the defaults here are its values, checked by
+tests/workflow/test_param_defaults.py). Units are SI unless the key names one."""
 import zlib
 from dataclasses import asdict, dataclass, field, fields
 
@@ -50,17 +51,18 @@ class RigParams:
     static_window_steps: int = 10000
     static_tolerance: float = 0.025
     static_max_windows: int = 40
-    servo_velocity_m_s: float = 0.05
+    servo_velocity_m_s: float = 0.2
     servo_gain_m_s_per_kN: float = 0.05
     servo_integral_steps: int = 10000
     cyclic_min_kN: float = 15.0
     cyclic_max_kN: float = 45.0
-    cyclic_v_max_m_s: float = 0.05
-    cyclic_v_min_m_s: float = 0.005
+    cyclic_v_max_m_s: float = 0.1
+    cyclic_v_min_m_s: float = 0.01
+    cyclic_braking_fraction: float = 0.25
     settlement_force_kN: float = 30.0
     cycles: int = 1000
     control_every: int = 10
-    loading_dt_factor: float = 1.0
+    loading_dt_factor: float = 2.0
     checkpoint_every: int = 50
     snapshot_every: int = 10
     timeseries_every: int = 10

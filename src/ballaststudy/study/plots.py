@@ -78,9 +78,20 @@ def fig_final_breakage(study):
     return fig
 
 
+FINAL_BREAKAGE = "fig_5-3_final_breakage_rate.png"
+FINES_THRESHOLD = "fig_fines_threshold.png"
+
+
+def figure_names():
+    """File names of every figure the optimisation report writes (for the workflow)."""
+    names = [f[0] for f in FIGURES]
+    names.insert(2, FINAL_BREAKAGE)
+    return names + [FINES_THRESHOLD]
+
+
 def write_figures(study, out_dir):
     """Write Figs. 5-1 ... 5-6 into `out_dir` (atomically); return the paths."""
     out = Path(out_dir)
     paths = [_save(fig_behaviour(study, v, label, f), out / name) for name, v, label, f in FIGURES]
-    paths.insert(2, _save(fig_final_breakage(study), out / "fig_5-3_final_breakage_rate.png"))
+    paths.insert(2, _save(fig_final_breakage(study), out / FINAL_BREAKAGE))
     return paths

@@ -104,7 +104,7 @@ def write_report(study, out_dir, n_boot=2000, seed=0, study_path=None):
     pareto = optimise.pareto_set(ctx["summary"])
     recommend = optimise.recommended(ctx["ranking"])
     figures = plots.write_figures(study, out)
-    fig = out / "fig_fines_threshold.png"
+    fig = out / plots.FINES_THRESHOLD
     with atomic_path(fig) as tmp:
         fig_fines_threshold(ctx).savefig(tmp, format="png", dpi=plots.DPI)
     figures.append(fig)
