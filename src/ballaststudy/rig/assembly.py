@@ -14,6 +14,7 @@ Each stage is a few "fix"-like operations between engine runs; the engine does t
 import numpy as np
 
 from ..dem import ContactMaterial, Simulation
+from ..dem.contacts import LC_MU
 from ..dem.params import GY, THICK
 from .box import BoxRig, RigLayout
 
@@ -32,6 +33,19 @@ def choose_stones(lib, params, rng):
         if len(picks) > 100000:
             raise ValueError("library stones are too small for the container")
     return picks
+
+
+def _assembly_mu(params, mu):
+    """Friction between stones and walls while dropping and tamping."""
+    return mu if params.assembly_friction is None else params.assembly_friction
+
+
+def restore_friction(rig, lib_mu):
+    """Table 4.2's friction for every pair but the loading contact (steel-steel)."""
+    lc = rig.sim.lc
+    keep = lc[STEEL, STEEL].copy()
+    lc[..., LC_MU] = lib_mu
+    lc[STEEL, STEEL] = keep
 
 
 def build_tall(lib, params, seed, contact_damping=None):
@@ -60,8 +74,8 @@ def build_tall(lib, params, seed, contact_damping=None):
                      domain=(-0.5 * wt - margin, -margin, 0.5 * wt + margin, h_tall + margin))
     beta = p.contact_damping_ratio if contact_damping is None else contact_damping
     lc = lib.materials[0]["lc"]
-    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=lc.mu, beta_n=beta,
-                                             beta_s=beta))
+    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=_assembly_mu(p, lc.mu),
+                                             beta_n=beta, beta_s=beta))
     # the loading ball sits loosely on the plate (not rigidly coupled, thesis 4.1): a softer,
     # damped steel-steel contact so the velocity-controlled ball does not hammer the plate
     sim.set_contact_material(ContactMaterial(E=p.loading_contact_E_Pa, kappa=lc.kappa, mu=lc.mu,
@@ -333,6 +347,8 @@ def assemble(lib, params, seed, progress=None):
     st = rig.layout.stage_steps
     st["drop"] = drop(rig, progress)
     st["tamping"] = tamp(rig, progress)
+    if params.assembly_friction is not None:
+        restore_friction(rig, lib.materials[0]["lc"].mu)
     st["reset"] = move_side_walls(rig, progress)
     st["plate"] = settle_plate(rig, progress)
     add_loading_ball(rig)

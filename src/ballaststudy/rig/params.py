@@ -15,7 +15,7 @@ class RigParams:
     bottom_segments: int = 20          # 4.2.2 d
     # not in the thesis
     tall_width_factor: float = 1.25    # tall container width / width during drop + tamping
-    fill_area_ratio: float = 0.7      # ball area of the drawn stones / (width * depth)
+    fill_area_ratio: float = 1.0       # ball area of the drawn stones / (width * depth)
     placement_gap_factor: float = 1.1  # cell size = factor * largest stone diameter
     plate_width_m: float = 0.30
     plate_thickness_m: float = 0.02
@@ -25,6 +25,7 @@ class RigParams:
     loading_contact_E_Pa: float = 5.0e8
     loading_contact_damping_ratio: float = 0.0
     drop_gravity_m_s2: float = 1000.0  # 4.2.2 b
+    assembly_friction: float | None = 0.0    # stone friction while dropping/tamping (None: Table 4.2)
     drop_bond_factor: float = 128.0
     drop_damping: float = 0.7
     drop_check_every: int = 50
