@@ -166,3 +166,20 @@ def test_density_scaling_option(assembled):
     run = LoadingRun(rig, cycles=1).run()
     assert rig.sim.dt == pytest.approx(4.0 * dt0)
     assert len(run.cyc["force_max"]) == 1 and run.cyc["force_max"][0] >= 45e3
+
+
+def test_cyclic_speed_profile(assembled):
+    """v_max until the force is within the braking fraction of the range from the bound
+    approached, then linear down to v_min at the bound; direction = sign."""
+    run = LoadingRun(BoxRig.load(assembled[0]), cycles=1)
+    p = run.rig.params
+    p.cyclic_v_max_m_s, p.cyclic_v_min_m_s, p.cyclic_braking_fraction = 0.1, 0.01, 0.25
+    run.s["phase"], run.s["direction"] = "cyclic", -1          # loading towards 45 kN
+    band = 0.25 * 30e3
+    assert run._velocity(15e3) == pytest.approx(-0.1)
+    assert run._velocity(45e3 - band) == pytest.approx(-0.1)
+    assert run._velocity(45e3 - 0.5 * band) == pytest.approx(-0.055)
+    assert run._velocity(45e3) == pytest.approx(-0.01)
+    run.s["direction"] = 1                                     # unloading towards 15 kN
+    assert run._velocity(15e3 + 0.5 * band) == pytest.approx(0.055)
+    assert run._velocity(40e3) == pytest.approx(0.1)
