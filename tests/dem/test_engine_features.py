@@ -3,6 +3,7 @@ mechanism, held clump (plate) servo, critical timestep, density scaling, per-bod
 import math
 
 import numpy as np
+import pytest
 
 from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation
 from ballaststudy.dem.generate import random_disks
@@ -75,6 +76,33 @@ def test_density_scaling_raises_inertia_and_reports_inertial_number():
     assert np.isfinite(sim.balls.pos).all()
     i_num = sim.inertial_number(shear_rate=1.0, pressure=1e5)
     assert math.isclose(i_num, 0.02 * math.sqrt(2650.0 / 1e5))
+
+
+def test_density_scaling_switched_on_and_off():
+    """set_density_scaling(dt): fixed dt, inertial masses raised so that it is stable, the
+    weight unchanged (free fall of a lone scaled ball still at g); None: the automatic
+    critical dt and the real masses again."""
+    sim = Simulation(gravity=(0, 0), dt_safety=0.8, domain=(-1, -1, 1, 1))
+    sim.set_contact_material(ContactMaterial(E=1e8))
+    sim.add_balls([0.0, 0.0199, 0.5], [0, 0, 0.5], [0.01, 0.01, 0.01], 2650.0)
+    sim.run(1)
+    dt0 = sim.dt
+    sim.set_density_scaling(4.0 * dt0)
+    sim.run(1)
+    assert sim.dt == 4.0 * dt0
+    m_in = 1.0 / sim.balls.minv
+    assert np.allclose(m_in[:2] / sim.balls.mass[:2], 16.0, rtol=1e-9), "x4 dt needs x16 inertia"
+    assert m_in[2] == sim.balls.mass[2], "a ball without neighbours keeps its mass"
+    sim.set_gravity((0.0, -9.81))
+    v0 = sim.balls.vel[0, 1]
+    sim.run(10)
+    a = (sim.balls.vel[0, 1] - v0) / (10 * sim.dt)
+    # velocity Verlet: the first half kick still used the force from before gravity was on
+    assert a == pytest.approx(-9.81 / 16.0 * 9.5 / 10.0, rel=1e-9), "weight on the real mass, inertia scaled"
+    sim.set_density_scaling(None)
+    sim.run(1)
+    assert np.array_equal(1.0 / sim.balls.minv, sim.balls.mass)
+    assert sim.dt == pytest.approx(dt0, rel=1e-6)
 
 
 def test_per_body_damping():

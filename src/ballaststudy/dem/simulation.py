@@ -307,6 +307,24 @@ class Simulation:
             else:
                 self.clumps.damp[clumps] = clump_alpha
 
+    def set_density_scaling(self, dt=None):
+        """Fixed timestep ``dt`` with density scaling: at every neighbour rebuild each free
+        ball's inertial mass (and moment) is raised so that ``dt`` is stable, while gravity
+        acts on the real mass. ``None``: back to the automatic critical timestep and the
+        real inertial masses."""
+        p, b = self.prm, self.balls
+        if dt is None:
+            p[P.DSCALE] = 0.0
+            p[P.AUTO_DT] = 1.0
+            free = b.clump < 0
+            b.minv[free] = 1.0 / b.mass[free]
+            b.iinv[free] = 1.0 / b.inertia[free]
+        else:
+            p[P.DT] = float(dt)
+            p[P.AUTO_DT] = 0.0
+            p[P.DSCALE] = 1.0
+        self._touch()
+
     def set_gravity(self, g):
         self.prm[P.GX], self.prm[P.GY] = g
 

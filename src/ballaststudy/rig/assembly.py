@@ -177,6 +177,10 @@ def drop(rig, progress=None):
     p, sim = rig.params, rig.sim
     sim.scale_bond_strength(p.drop_bond_factor)
     state = {"fell": False, "steps": 0}
+    if p.assembly_dt_factor > 1.0:      # until the cut (tamp): a packing at rest is the aim
+        sim.run(1)                      # the first neighbour build gives the critical dt
+        sim.set_density_scaling(p.assembly_dt_factor * sim.dt)
+        state["steps"] = 1
 
     def watch(s):
         b = s.balls
@@ -219,6 +223,7 @@ def tamp(rig, progress=None):
         if progress is not None:
             progress(per)
     done += settle(rig, progress)
+    sim.set_density_scaling(None)
     b = sim.balls
     ids = rig.stone_balls()
     sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.depth_m])

@@ -51,18 +51,6 @@ CYCLE_FIELDS = {
 }
 
 
-def set_density_scaling(sim, dt):
-    """Fixed timestep ``dt`` with density scaling (the engine raises each ball's inertial
-    mass so that dt is stable; gravity still acts on the real mass). The engine offers
-    this only in its constructor, so the rig sets the same run parameters here and asks
-    for a neighbour rebuild (which recomputes the inertial masses)."""
-    from ..dem import params as P
-    sim.prm[P.DT] = dt
-    sim.prm[P.AUTO_DT] = 0.0
-    sim.prm[P.DSCALE] = 1.0
-    sim._touch()
-
-
 class LoadingRun:
     """The loading state machine of one case. ``advance()`` = one control step."""
 
@@ -94,7 +82,7 @@ class LoadingRun:
         self._metrics_setup()
         self._ckpt_due = False
         if p.loading_dt_factor > 1.0 and not resumed:
-            set_density_scaling(rig.sim, p.loading_dt_factor * rig.sim.dt)
+            rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
     def _metrics_setup(self):
         from ..metrics import MetricsParams

@@ -26,6 +26,7 @@ class RigParams:
     loading_contact_damping_ratio: float = 0.0
     drop_gravity_m_s2: float = 1000.0  # 4.2.2 b
     assembly_friction: float | None = 0.0    # stone friction while dropping/tamping (None: Table 4.2)
+    assembly_dt_factor: float = 2.0    # density scaling while dropping/tamping: dt = factor x dt_crit
     drop_bond_factor: float = 128.0
     drop_damping: float = 0.7
     drop_check_every: int = 50
