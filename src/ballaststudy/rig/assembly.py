@@ -35,17 +35,23 @@ def choose_stones(lib, params, rng):
     return picks
 
 
-def _assembly_mu(params, mu):
-    """Friction between stones and walls while dropping and tamping."""
-    return mu if params.assembly_friction is None else params.assembly_friction
-
-
-def restore_friction(rig, lib_mu):
-    """Table 4.2's friction for every pair but the loading contact (steel-steel)."""
-    lc = rig.sim.lc
-    keep = lc[STEEL, STEEL].copy()
-    lc[..., LC_MU] = lib_mu
-    lc[STEEL, STEEL] = keep
+def assembly_conditions(rig, mu, on):
+    """While dropping and tamping (``on``): friction ``assembly_friction`` for every contact
+    (a dense specimen; None keeps Table 4.2's) and density scaling at ``assembly_dt_factor``
+    (only the packing at rest matters there). Off: friction ``mu`` (Table 4.2) and the real
+    masses. Returns the steps run (one: the first neighbour build gives dt_crit)."""
+    p, sim = rig.params, rig.sim
+    if not on:
+        sim.lc[..., LC_MU] = mu            # the loading contact has Table 4.2's mu too
+        sim.set_density_scaling(None)
+        return 0
+    if p.assembly_friction is not None:
+        sim.lc[..., LC_MU] = p.assembly_friction
+    if p.assembly_dt_factor <= 1.0:
+        return 0
+    sim.run(1)
+    sim.set_density_scaling(p.assembly_dt_factor * sim.dt)
+    return 1
 
 
 def build_tall(lib, params, seed, contact_damping=None):
@@ -74,8 +80,8 @@ def build_tall(lib, params, seed, contact_damping=None):
                      domain=(-0.5 * wt - margin, -margin, 0.5 * wt + margin, h_tall + margin))
     beta = p.contact_damping_ratio if contact_damping is None else contact_damping
     lc = lib.materials[0]["lc"]
-    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=_assembly_mu(p, lc.mu),
-                                             beta_n=beta, beta_s=beta))
+    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=lc.mu, beta_n=beta,
+                                             beta_s=beta))
     # the loading ball sits loosely on the plate (not rigidly coupled, thesis 4.1): a softer,
     # damped steel-steel contact so the velocity-controlled ball does not hammer the plate
     sim.set_contact_material(ContactMaterial(E=p.loading_contact_E_Pa, kappa=lc.kappa, mu=lc.mu,
@@ -177,10 +183,6 @@ def drop(rig, progress=None):
     p, sim = rig.params, rig.sim
     sim.scale_bond_strength(p.drop_bond_factor)
     state = {"fell": False, "steps": 0}
-    if p.assembly_dt_factor > 1.0:      # until the cut (tamp): a packing at rest is the aim
-        sim.run(1)                      # the first neighbour build gives the critical dt
-        sim.set_density_scaling(p.assembly_dt_factor * sim.dt)
-        state["steps"] = 1
 
     def watch(s):
         b = s.balls
@@ -223,7 +225,6 @@ def tamp(rig, progress=None):
         if progress is not None:
             progress(per)
     done += settle(rig, progress)
-    sim.set_density_scaling(None)
     b = sim.balls
     ids = rig.stone_balls()
     sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.depth_m])
@@ -350,10 +351,10 @@ def assemble(lib, params, seed, progress=None):
     """All of 4.2.2: returns the relaxed BoxRig (loading ball not yet loaded)."""
     rig = build_tall(lib, params, seed)
     st = rig.layout.stage_steps
-    st["drop"] = drop(rig, progress)
+    mu = lib.materials[0]["lc"].mu
+    st["drop"] = assembly_conditions(rig, mu, on=True) + drop(rig, progress)
     st["tamping"] = tamp(rig, progress)
-    if params.assembly_friction is not None:
-        restore_friction(rig, lib.materials[0]["lc"].mu)
+    assembly_conditions(rig, mu, on=False)
     st["reset"] = move_side_walls(rig, progress)
     st["plate"] = settle_plate(rig, progress)
     add_loading_ball(rig)
