@@ -11,7 +11,8 @@ def model(seed, law="pfc"):
     kw = {} if law == "pfc" else dict(law="hooke", dt=2e-5, hooke=dict(
         kn=1e6, kt=2e6 / 7, gamma_n=2000.0, gamma_t=1000.0, mu=0.5))
     sim = Simulation(gravity=(0, -9.81), damping=0.3, domain=(-0.05, -0.05, 0.25, 0.5), **kw)
-    sim.set_contact_material(ContactMaterial(E=1e7, mu=0.5, beta_n=0.2, beta_s=0.1))
+    if law == "pfc":
+        sim.set_contact_material(ContactMaterial(E=1e7, mu=0.5, beta_n=0.2, beta_s=0.1))
     sim.add_wall([(0, 0.3), (0, 0), (0.2, 0), (0.2, 0.3)], segments=3)
     top = sim.add_wall([(0.0, 0.28), (0.2, 0.28)])
     sim.set_wall_velocity(top, (0.0, -0.2))

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ballaststudy.dem.contacts import LC_MU
 from ballaststudy.rig.box import BoxRig
 from ballaststudy.rig.loading import CYCLE_FIELDS, LoadingRun
 from ballaststudy.rig.records import to_dataset
@@ -26,10 +25,10 @@ def test_assembly(assembled, small_params):
     assert np.all(b.pos[ids, 1] + b.rad[ids] <= small_params.depth_m + 1e-3)
     assert rig.sim.walls.seg[lay.left_low, 0] == pytest.approx(-w2, abs=1e-6)
     assert rig.sim.walls.seg[lay.right_low, 0] == pytest.approx(w2, abs=1e-6)
-    assert int(rig.sim.log.n[0]) == 0, "bonds broke during the (strengthened) assembly"
+    assert rig.sim.n_breakages == 0, "bonds broke during the (strengthened) assembly"
     # frictionless while dropping and tamping, Table 4.2's friction everywhere afterwards
     assert small_params.assembly_friction == 0.0
-    assert np.all(rig.sim.lc[..., LC_MU] == pytest.approx(0.7))
+    assert np.all(rig.sim.contact_coefficient("mu") == pytest.approx(0.7))
     again = BoxRig.load(path)                                # the file restores the state
     assert np.array_equal(again.sim.balls.pos, rig.sim.balls.pos)
     assert again.layout.plate == lay.plate and again.layout.loading == lay.loading

@@ -22,20 +22,28 @@ MODE_SHEAR = 2
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _strip(gc, th, a, b, compressed_only):
-    """Integrals of g(s) and g(s)*s over [a, b] (restricted to g < 0 if asked)."""
+def _loaded_part(gc, th, a, b, compressed_only):
+    """The part of [a, b] that carries load: all of it, or where g(s) = gc - th*s < 0 if
+    ``compressed_only``. Returns (a, b); empty when b <= a."""
     if compressed_only:
         if th == 0.0:
             if gc >= 0.0:
-                return 0.0, 0.0
+                return a, a
         else:
             root = gc / th
             if th > 0.0:
                 a = max(a, root)
             else:
                 b = min(b, root)
-            if b <= a:
-                return 0.0, 0.0
+    return a, b
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _strip(gc, th, a, b, compressed_only):
+    """Integrals of g(s) and g(s)*s over [a, b] (restricted to g < 0 if asked)."""
+    a, b = _loaded_part(gc, th, a, b, compressed_only)
+    if b <= a:
+        return 0.0, 0.0
     i0 = gc * (b - a) - th * (b * b - a * a) / 2.0
     i1 = gc * (b * b - a * a) / 2.0 - th * (b * b * b - a * a * a) / 3.0
     return i0, i1
@@ -44,30 +52,24 @@ def _strip(gc, th, a, b, compressed_only):
 @njit(cache=True, error_model="numpy", inline="always")
 def _strip_sq(gc, th, a, b, compressed_only):
     """Integral of g(s)^2 over [a, b] (restricted to g < 0 if asked): strain energy."""
-    if compressed_only:
-        if th == 0.0:
-            if gc >= 0.0:
-                return 0.0
-        else:
-            root = gc / th
-            if th > 0.0:
-                a = max(a, root)
-            else:
-                b = min(b, root)
-            if b <= a:
-                return 0.0
+    a, b = _loaded_part(gc, th, a, b, compressed_only)
+    if b <= a:
+        return 0.0
     fb = gc * gc * b - gc * th * b * b + th * th * b ** 3 / 3.0
     fa = gc * gc * a - gc * th * a * a + th * th * a ** 3 / 3.0
     return fb - fa
 
 
 @njit(cache=True, error_model="numpy")
-def bond_forces(prm, step, kin, rad, stone, fa,
-                b_i, b_j, b_active, rbar, d0, gi, kn, ks, sigc, coh, tanphi, bmu,
-                theta, bmom, state, bfn, bfs,
-                l_step, l_time, l_bond, l_elem, l_i, l_j, l_stone, l_mode, l_x, l_y,
-                l_stress, l_n, eacc):
+def bond_forces(run, kin, balls, fa, bonds, log):
     """Flat-joint forces, element failure (logged) and interface removal."""
+    prm = run.prm
+    eacc = run.eacc
+    step = run.cnt[0]
+    rad = balls.rad
+    b_i, b_j, b_active, rbar, d0, gi = bonds.i, bonds.j, bonds.active, bonds.rbar, bonds.d0, bonds.gi
+    kn, ks, sigc, coh, tanphi, bmu = bonds.kn, bonds.ks, bonds.sigc, bonds.coh, bonds.tanphi, bonds.mu
+    theta, bmom, state, bfn, bfs = bonds.theta, bonds.moment, bonds.state, bonds.fn, bonds.fs
     dt = prm[P.DT]
     t = prm[P.THICK]
     ne = state.shape[1]
@@ -113,19 +115,19 @@ def bond_forces(prm, step, kin, rad, stone, fa,
                 elif tau >= coh[b] - sig * tanphi[b]:
                     mode = MODE_SHEAR
                 if mode > 0:
-                    k = l_n[0]
-                    l_step[k] = step
-                    l_time[k] = prm[P.TIME]
-                    l_bond[k] = b
-                    l_elem[k] = e
-                    l_i[k] = i
-                    l_j[k] = j
-                    l_stone[k] = stone[i]
-                    l_mode[k] = mode
-                    l_x[k] = kin[i, 0] + ai * nx + se * tx
-                    l_y[k] = kin[i, 1] + ai * ny + se * ty
-                    l_stress[k] = sig if mode == MODE_TENSION else tau
-                    l_n[0] = k + 1
+                    k = log.n[0]
+                    log.step[k] = step
+                    log.time[k] = prm[P.TIME]
+                    log.bond[k] = b
+                    log.elem[k] = e
+                    log.i[k] = i
+                    log.j[k] = j
+                    log.stone[k] = balls.stone[i]
+                    log.mode[k] = mode
+                    log.x[k] = kin[i, 0] + ai * nx + se * tx
+                    log.y[k] = kin[i, 1] + ai * ny + se * ty
+                    log.stress[k] = sig if mode == MODE_TENSION else tau
+                    log.n[0] = k + 1
                     state[b, e] = 0
                     # strain energy before the break; what survives is subtracted below
                     e_break = (0.5 * kn[b] * t * _strip_sq(gc, th, a, a + le, False)
@@ -169,9 +171,11 @@ def bond_forces(prm, step, kin, rad, stone, fa,
 
 
 @njit(cache=True, error_model="numpy")
-def bond_energy(pos, b_i, b_j, b_active, rbar, d0, kn, ks, theta, state, bfs, thick):
+def bond_energy(pos, bonds, thick):
     """Elastic energy stored in flat joints: int 0.5 k_n t g(s)^2 ds over loaded parts
     plus 0.5 F_s^2 / (k_s A_e) per element."""
+    b_i, b_j, b_active, rbar, d0 = bonds.i, bonds.j, bonds.active, bonds.rbar, bonds.d0
+    kn, ks, theta, state, bfs = bonds.kn, bonds.ks, bonds.theta, bonds.state, bonds.fs
     e_tot = 0.0
     ne = state.shape[1]
     for b in range(b_i.shape[0]):

@@ -1,7 +1,8 @@
 """Checkpoint: the whole Simulation state in one .npz, written atomically.
 
 Everything the kernels read is saved (ball/wall/clump arrays, both Verlet lists with their
-history, bonds, breakage log, counters, parameters, material table), so a restored run
+per-contact history and state, bonds, breakage log, counters, parameters, the contact law's
+sub-models and its material-pair table), so a restored run
 continues bit for bit.
 """
 import json
@@ -15,9 +16,9 @@ from .state import Balls, Bonds, BreakLog, Clumps, Pairs, WallPairs, Walls
 _PARTS = (("balls", Balls, "b_"), ("walls", Walls, "w_"), ("clumps", Clumps, "c_"),
           ("pairs", Pairs, "p_"), ("wpairs", WallPairs, "q_"), ("bonds", Bonds, "f_"),
           ("log", BreakLog, "l_"))
-_ARRAYS = ("prm", "cnt", "eacc", "err", "lc")
+_ARRAYS = ("prm", "cnt", "eacc", "err", "coef")
 _META = ("skin", "domain", "n_elements", "_prepared")
-FORMAT = 2      # bump when the saved arrays change
+FORMAT = 3      # bump when the saved arrays change
 
 
 def save_state(path, sim):
@@ -28,7 +29,8 @@ def save_state(path, sim):
         data["s_" + name] = getattr(sim, name)
     meta = {k: getattr(sim, k) for k in _META}
     meta["format"] = FORMAT
-    meta["lc_default"] = list(vars(sim._lc_default).values())  # dataclass fields in order
+    meta["law"] = list(sim.law.names)
+    meta["default_row"] = list(sim._default_row)
     data["meta"] = np.array(json.dumps(meta))
     d = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(dir=d, prefix=".ckpt-", suffix=".npz")
@@ -45,7 +47,7 @@ def save_state(path, sim):
 
 
 def load_state(path, sim):
-    from .materials import ContactMaterial
+    from .law import ContactLaw
     with np.load(path) as z:
         d = {k: z[k] for k in z.files}
     meta = json.loads(str(d["meta"]))
@@ -59,4 +61,6 @@ def load_state(path, sim):
     for k in _META:
         v = meta[k]
         setattr(sim, k, tuple(v) if isinstance(v, list) else v)
-    sim._lc_default = ContactMaterial(*meta["lc_default"])
+    sim.law = ContactLaw.from_names(meta["law"])
+    sim._layout = sim.law.layout()
+    sim._default_row = meta["default_row"]

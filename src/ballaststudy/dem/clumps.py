@@ -23,11 +23,16 @@ def mass_properties(x, y, r, rho, thick):
 
 
 @njit(cache=True, error_model="numpy")
-def place_pebbles(kin, clump, offset, alive, cpos, cvel, comega, ctheta):
+def place_pebbles(kin, balls, clumps):
     """Pebble position/velocity from the rigid motion of their clump."""
+    offset = balls.offset
+    cpos = clumps.pos
+    cvel = clumps.vel
+    comega = clumps.omega
+    ctheta = clumps.theta
     for i in range(kin.shape[0]):
-        c = clump[i]
-        if c < 0 or not alive[i]:
+        c = balls.clump[i]
+        if c < 0 or not balls.alive[i]:
             continue
         cs = math.cos(ctheta[c])
         sn = math.sin(ctheta[c])
@@ -41,15 +46,19 @@ def place_pebbles(kin, clump, offset, alive, cpos, cvel, comega, ctheta):
 
 
 @njit(cache=True, error_model="numpy")
-def gather_clumps(gx, gy, kin, fa, clump, alive, cpos, cmass, cforce, cmoment):
+def gather_clumps(gx, gy, kin, fa, balls, clumps):
     """Clump force = weight + sum of pebble forces; moment about the centre of mass."""
+    cpos = clumps.pos
+    cmass = clumps.mass
+    cforce = clumps.force
+    cmoment = clumps.moment
     for c in range(cpos.shape[0]):
         cforce[c, 0] = cmass[c] * gx
         cforce[c, 1] = cmass[c] * gy
         cmoment[c] = 0.0
     for i in range(kin.shape[0]):
-        c = clump[i]
-        if c < 0 or not alive[i]:
+        c = balls.clump[i]
+        if c < 0 or not balls.alive[i]:
             continue
         cforce[c, 0] += fa[i, 0]
         cforce[c, 1] += fa[i, 1]

@@ -12,12 +12,36 @@ import numpy as np
 from numba import njit
 
 from . import params as P
-from .contacts import LC_E, LC_KAPPA
+from .submodels import contact_stiffness
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _moved(i, kin, fa, balls, cx, cy, wt, wx, wy, d1, d2, near_wall):
+    """Verlet-list check of ball i after its drift and the force reset for the next
+    forces: weight (wx, wy; zero for pebbles, whose clump carries it) + external load.
+    Returns the updated (top-2 squared |dx - c|, wall flag)."""
+    dx = kin[i, 0] - balls.pos0[i, 0]
+    dy = kin[i, 1] - balls.pos0[i, 1]
+    rx = dx - cx
+    ry = dy - cy
+    dd = rx * rx + ry * ry
+    if dd > d2:
+        if dd > d1:
+            d2 = d1
+            d1 = dd
+        else:
+            d2 = dd
+    lim = balls.clear[i] - wt
+    if lim <= 0.0 or dx * dx + dy * dy >= lim * lim:
+        near_wall = True
+    fa[i, 0] = wx + balls.fext[i, 0]
+    fa[i, 1] = wy + balls.fext[i, 1]
+    fa[i, 2] = 0.0
+    return d1, d2, near_wall
 
 
 @njit(cache=True, error_model="numpy")
-def first_half(dt, gx, gy, cx, cy, wt, kin, fa, mass, fext, minv, iinv, fix, clump, alive,
-               pos0, clear, cpos, cvel, comega, ctheta, cforce, cmoment, cmass, cinertia, cheld):
+def first_half(prm, kin, fa, balls, clumps):
     """One pass per free ball over its packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m,
     material) and force row ``fa`` = (fx, fy, mz): half kick (held dofs keep their
     velocity), drift, the displacement since the last neighbour build, force reset to
@@ -28,6 +52,12 @@ def first_half(dt, gx, gy, cx, cy, wt, kin, fa, mass, fext, minv, iinv, fix, clu
     c = the mean displacement of the previous step, so a bed falling as a whole does not
     force rebuilds. A ball may reach an unlisted wall segment only after moving
     clear[i] - wall travel. Returns (top-2 squared |dx - c|, wall flag, sum dx, sum dy, n)."""
+    dt = prm[P.DT]
+    gx = prm[P.GX]
+    gy = prm[P.GY]
+    cx = prm[P.SHIFT_X]
+    cy = prm[P.SHIFT_Y]
+    wt = prm[P.WALL_TRAVEL]
     h = 0.5 * dt
     d1 = 0.0
     d2 = 0.0
@@ -36,79 +66,50 @@ def first_half(dt, gx, gy, cx, cy, wt, kin, fa, mass, fext, minv, iinv, fix, clu
     sy = 0.0
     cnt = 0
     for i in range(kin.shape[0]):
-        if clump[i] >= 0:
+        if balls.clump[i] >= 0:
             continue
-        if not alive[i]:
+        if not balls.alive[i]:
             fa[i, 0] = 0.0
             fa[i, 1] = 0.0
             fa[i, 2] = 0.0
             continue
-        f = fix[i]
+        f = balls.fix[i]
         if not (f & 1):
-            kin[i, 2] += h * fa[i, 0] * minv[i]
+            kin[i, 2] += h * fa[i, 0] * balls.minv[i]
         if not (f & 2):
-            kin[i, 3] += h * fa[i, 1] * minv[i]
+            kin[i, 3] += h * fa[i, 1] * balls.minv[i]
         if not (f & 4):
-            kin[i, 4] += h * fa[i, 2] * iinv[i]
-        x = kin[i, 0] + dt * kin[i, 2]
-        y = kin[i, 1] + dt * kin[i, 3]
-        kin[i, 0] = x
-        kin[i, 1] = y
-        dx = x - pos0[i, 0]
-        dy = y - pos0[i, 1]
-        sx += dx
-        sy += dy
+            kin[i, 4] += h * fa[i, 2] * balls.iinv[i]
+        kin[i, 0] += dt * kin[i, 2]
+        kin[i, 1] += dt * kin[i, 3]
+        sx += kin[i, 0] - balls.pos0[i, 0]
+        sy += kin[i, 1] - balls.pos0[i, 1]
         cnt += 1
-        rx = dx - cx
-        ry = dy - cy
-        dd = rx * rx + ry * ry
-        if dd > d2:
-            if dd > d1:
-                d2 = d1
-                d1 = dd
-            else:
-                d2 = dd
-        lim = clear[i] - wt
-        if lim <= 0.0 or dx * dx + dy * dy >= lim * lim:
-            near_wall = True
-        fa[i, 0] = mass[i] * gx + fext[i, 0]
-        fa[i, 1] = mass[i] * gy + fext[i, 1]
-        fa[i, 2] = 0.0
-    for c in range(cpos.shape[0]):
-        if not cheld[c]:
-            cvel[c, 0] += h * cforce[c, 0] / cmass[c]
-            cvel[c, 1] += h * cforce[c, 1] / cmass[c]
-            comega[c] += h * cmoment[c] / cinertia[c]
-        cpos[c, 0] += dt * cvel[c, 0]
-        cpos[c, 1] += dt * cvel[c, 1]
-        ctheta[c] += dt * comega[c]
+        m = balls.mass[i]
+        d1, d2, near_wall = _moved(i, kin, fa, balls, cx, cy, wt, m * gx, m * gy, d1, d2,
+                                   near_wall)
+    for c in range(clumps.pos.shape[0]):
+        if not clumps.held[c]:
+            clumps.vel[c, 0] += h * clumps.force[c, 0] / clumps.mass[c]
+            clumps.vel[c, 1] += h * clumps.force[c, 1] / clumps.mass[c]
+            clumps.omega[c] += h * clumps.moment[c] / clumps.inertia[c]
+        clumps.pos[c, 0] += dt * clumps.vel[c, 0]
+        clumps.pos[c, 1] += dt * clumps.vel[c, 1]
+        clumps.theta[c] += dt * clumps.omega[c]
     return d1, d2, near_wall, sx, sy, cnt
 
 
 @njit(cache=True, error_model="numpy")
-def pebbles_moved(cx, cy, wt, kin, fa, fext, clump, alive, pos0, clear, d1, d2, near_wall):
-    """After ``place_pebbles``: the same list checks and force reset (external load only:
+def pebbles_moved(prm, kin, fa, balls, d1, d2, near_wall):
+    """After ``place_pebbles``: the same list check and force reset (external load only:
     the clump carries the weight) for pebbles."""
+    cx = prm[P.SHIFT_X]
+    cy = prm[P.SHIFT_Y]
+    wt = prm[P.WALL_TRAVEL]
     for i in range(kin.shape[0]):
-        if clump[i] < 0 or not alive[i]:
-            continue
-        dx = kin[i, 0] - pos0[i, 0]
-        dy = kin[i, 1] - pos0[i, 1]
-        rx = dx - cx
-        ry = dy - cy
-        dd = rx * rx + ry * ry
-        if dd > d2:
-            if dd > d1:
-                d2 = d1
-                d1 = dd
-            else:
-                d2 = dd
-        lim = clear[i] - wt
-        if lim <= 0.0 or dx * dx + dy * dy >= lim * lim:
-            near_wall = True
-        fa[i, 0] = fext[i, 0]
-        fa[i, 1] = fext[i, 1]
-        fa[i, 2] = 0.0
+        if balls.clump[i] >= 0 and balls.alive[i]:
+            d1, d2, near_wall = _moved(i, kin, fa, balls, cx, cy, wt, 0.0, 0.0, d1, d2,
+                                       near_wall)
     return d1, d2, near_wall
 
 
@@ -139,8 +140,7 @@ def _damped(f, v, alpha):
 
 
 @njit(cache=True, error_model="numpy")
-def second_half(prm, kin, fa, minv, iinv, fix, clump, alive, damp,
-                cvel, comega, cforce, cmoment, cmass, cinertia, cheld, cdamp, eacc, err):
+def second_half(prm, kin, fa, balls, clumps, eacc, err):
     """Local damping (per body: ``damp``, ``cdamp``; not on velocity-held dofs) + half
     kick; then the guards. Returns a status code and puts the offending ball id and
     value in err[0], err[1]."""
@@ -152,12 +152,18 @@ def second_half(prm, kin, fa, minv, iinv, fix, clump, alive, damp,
     x1 = prm[P.XMAX]
     y0 = prm[P.YMIN]
     y1 = prm[P.YMAX]
+    minv = balls.minv
+    iinv = balls.iinv
+    cvel = clumps.vel
+    comega = clumps.omega
+    cforce = clumps.force
+    cmoment = clumps.moment
     suspect = cvel.shape[0] > 0          # pebbles are not checked in the loop below
     for i in range(kin.shape[0]):
-        if not alive[i] or clump[i] >= 0:
+        if not balls.alive[i] or balls.clump[i] >= 0:
             continue
-        f = fix[i]
-        alpha = damp[i]
+        f = balls.fix[i]
+        alpha = balls.damp[i]
         if alpha > 0.0:
             if not (f & 1):
                 fx = _damped(fa[i, 0], kin[i, 2], alpha)
@@ -185,9 +191,9 @@ def second_half(prm, kin, fa, minv, iinv, fix, clump, alive, damp,
         if not ok:
             suspect = True
     for c in range(cvel.shape[0]):
-        if cheld[c]:
+        if clumps.held[c]:
             continue
-        alpha = cdamp[c]
+        alpha = clumps.damp[c]
         if alpha > 0.0:
             fx = _damped(cforce[c, 0], cvel[c, 0], alpha)
             fy = _damped(cforce[c, 1], cvel[c, 1], alpha)
@@ -197,12 +203,12 @@ def second_half(prm, kin, fa, minv, iinv, fix, clump, alive, damp,
             cforce[c, 0] = fx
             cforce[c, 1] = fy
             cmoment[c] = mz
-        cvel[c, 0] += h * cforce[c, 0] / cmass[c]
-        cvel[c, 1] += h * cforce[c, 1] / cmass[c]
-        comega[c] += h * cmoment[c] / cinertia[c]
+        cvel[c, 0] += h * cforce[c, 0] / clumps.mass[c]
+        cvel[c, 1] += h * cforce[c, 1] / clumps.mass[c]
+        comega[c] += h * cmoment[c] / clumps.inertia[c]
     eacc[P.E_LOCAL] += el
     if suspect:
-        return guards(prm, kin, alive, err)
+        return guards(prm, kin, balls.alive, err)
     return P.OK
 
 
@@ -244,60 +250,53 @@ def guards(prm, kin, alive, err):
 
 
 @njit(cache=True, error_model="numpy")
-def critical_dt(prm, rad, mass, inertia, minv, iinv, mat, clump, alive, p_i, p_j, npair,
-                w_i, w_s, nwp, wmat, b_i, b_j, b_active, rbar, bkn, bks, lc):
+def critical_dt(run, balls, pr, wp, wmat, bonds):
     """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) over every pair of the Verlet
-    lists (touching or about to touch: conservative until the next rebuild) and bonds.
+    lists (touching or about to touch: conservative until the next rebuild) and bonds;
+    k_tr sums k_n + k_s, k_rot sums k_s R^2 + k_r (the law's stiffnesses).
     With density scaling, inertial masses are raised to k_tr*(dt/f)^2 instead (never
     lowered below the real mass: PFC scales both ways; we only add inertia)."""
+    prm = run.prm
+    rad = balls.rad
+    mat = balls.mat
     n = rad.shape[0]
     t = prm[P.THICK]
-    hooke = int(prm[P.LAW]) == P.LAW_HOOKE
     ktr = np.zeros(n)
     krot = np.zeros(n)
-    for p in range(npair):
-        i = p_i[p]
-        j = p_j[p]
-        if hooke:
-            kn = prm[P.H_KN]
-            ks = prm[P.H_KT]
-        else:
-            kn = 2.0 * min(rad[i], rad[j]) * t * lc[mat[i], mat[j], LC_E] / (rad[i] + rad[j])
-            ks = kn / lc[mat[i], mat[j], LC_KAPPA]
+    for p in range(pr.n[0]):
+        i = pr.i[p]
+        j = pr.j[p]
+        kn, ks, kr = contact_stiffness(run.law, run.coef, mat[i], mat[j], rad[i], rad[j], t)
         ktr[i] += kn + ks
         ktr[j] += kn + ks
-        krot[i] += ks * rad[i] ** 2
-        krot[j] += ks * rad[j] ** 2
-    for q in range(nwp):
-        i = w_i[q]
-        if hooke:
-            kn = prm[P.H_KN]
-            ks = prm[P.H_KT]
-        else:
-            kn = 2.0 * t * lc[wmat[w_s[q]], mat[i], LC_E]
-            ks = kn / lc[wmat[w_s[q]], mat[i], LC_KAPPA]
+        krot[i] += ks * rad[i] ** 2 + kr
+        krot[j] += ks * rad[j] ** 2 + kr
+    for q in range(wp.n[0]):
+        i = wp.i[q]
+        r = rad[i]
+        kn, ks, kr = contact_stiffness(run.law, run.coef, wmat[wp.s[q]], mat[i], 0.0, r, t)
         ktr[i] += kn + ks
-        krot[i] += ks * rad[i] ** 2
-    for b in range(b_i.shape[0]):
-        if not b_active[b]:
+        krot[i] += ks * r ** 2 + kr
+    for b in range(bonds.i.shape[0]):
+        if not bonds.active[b]:
             continue
-        a = 2.0 * rbar[b] * t
-        kn = bkn[b] * a
-        ks = bks[b] * a
-        kb = bkn[b] * t * (2.0 * rbar[b]) ** 3 / 12.0
-        for i in (b_i[b], b_j[b]):
+        a = 2.0 * bonds.rbar[b] * t
+        kn = bonds.kn[b] * a
+        ks = bonds.ks[b] * a
+        kb = bonds.kn[b] * t * (2.0 * bonds.rbar[b]) ** 3 / 12.0
+        for i in (bonds.i[b], bonds.j[b]):
             ktr[i] += kn + ks
             krot[i] += kb + ks * rad[i] ** 2
     f = prm[P.DT_SAFETY]
     dtc = 1.0e30
     for i in range(n):
-        if not alive[i] or ktr[i] == 0.0:
+        if not balls.alive[i] or ktr[i] == 0.0:
             continue
-        if prm[P.DSCALE] > 0.0 and clump[i] < 0:
+        if prm[P.DSCALE] > 0.0 and balls.clump[i] < 0:
             s2 = (prm[P.DT] / f) ** 2
-            minv[i] = 1.0 / max(mass[i], ktr[i] * s2)
-            iinv[i] = 1.0 / max(inertia[i], krot[i] * s2)
-        dtc = min(dtc, math.sqrt(1.0 / (minv[i] * ktr[i])))
+            balls.minv[i] = 1.0 / max(balls.mass[i], ktr[i] * s2)
+            balls.iinv[i] = 1.0 / max(balls.inertia[i], krot[i] * s2)
+        dtc = min(dtc, math.sqrt(1.0 / (balls.minv[i] * ktr[i])))
         if krot[i] > 0.0:
-            dtc = min(dtc, math.sqrt(1.0 / (iinv[i] * krot[i])))
+            dtc = min(dtc, math.sqrt(1.0 / (balls.iinv[i] * krot[i])))
     return dtc

@@ -7,7 +7,7 @@ rock, while the soft-rock entries (3.0e5 Pa, 9.0e5 Pa) are printed without the f
 are used as printed. ``FlatJointMaterial.scaled`` applies any further factor (the rig's
 bond strengthening while dropping).
 """
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 F_STR_CO = 3.5   # Table 4.2, hard and soft
 
@@ -17,7 +17,7 @@ class ContactMaterial:
     """Linear contact model (LC) between stones, walls and the plate (Table 4.2 "LC").
     beta_n/beta_s: dashpot damping ratios (not in Table 4.2; PFC default 0).
     no_tension: the total normal force (spring + dashpot) may not pull (physics spec).
-    ``row()`` is the layout of the kernels' material table (contacts.LC_*)."""
+    ``coefficients()`` names them as the PFC-family sub-models do (law.py)."""
     E: float = 5.0e9          # effective modulus E_n* [Pa]
     kappa: float = 2.5        # normal-to-shear stiffness ratio [-]
     mu: float = 0.7           # friction coefficient [-]
@@ -25,8 +25,10 @@ class ContactMaterial:
     beta_s: float = 0.0
     no_tension: bool = True
 
-    def row(self):
-        return [self.E, self.kappa, self.mu, self.beta_n, self.beta_s, float(self.no_tension)]
+    def coefficients(self):
+        d = asdict(self)
+        d["no_tension"] = float(self.no_tension)
+        return d
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,8 @@ import math
 import numpy as np
 from numba import njit
 
+from . import params as P
+
 
 @njit(cache=True, error_model="numpy")
 def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out_j):
@@ -215,40 +217,42 @@ def find_bond(bi, bj, i, j):
 
 
 @njit(cache=True, error_model="numpy")
-def rebuild(pos, rad, alive, clump, pos0, clear, skin, xmin, ymin, xmax, ymax,
-            p_i, p_j, p_h, p_bond, p_n, bond_i, bond_j, seg, w_i, w_s, w_h, w_n):
-    """Rebuild both Verlet lists in place, carrying the contact history over.
-    Returns (0, 0), or (1 | 2, needed) if the pair | wall-pair arrays are too small
-    (lists untouched)."""
-    n_old = p_n[0]
-    new_i = np.empty(p_i.shape[0], np.int32)
-    new_j = np.empty(p_i.shape[0], np.int32)
-    cnt = build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, new_i, new_j)
+def rebuild(prm, balls, pr, wp, bonds, seg):
+    """Rebuild both Verlet lists in place from ``balls.pos``, carrying the per-contact
+    columns (history and state) over. Returns (0, 0), or (1 | 2, needed) if the pair |
+    wall-pair arrays are too small (lists untouched)."""
+    pos = balls.pos
+    skin = prm[P.SKIN]
+    n_old = pr.n[0]
+    new_i = np.empty(pr.i.shape[0], np.int32)
+    new_j = np.empty(pr.i.shape[0], np.int32)
+    cnt = build_pairs(pos, balls.rad, balls.alive, balls.clump, skin, prm[P.XMIN],
+                      prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], new_i, new_j)
     if cnt < 0:
         return 1, -cnt
-    wn_old = w_n[0]
-    nw_i = np.empty(w_i.shape[0], np.int32)
-    nw_s = np.empty(w_i.shape[0], np.int32)
-    wcnt = build_wall_pairs(pos, rad, alive, seg, skin, nw_i, nw_s, clear)
+    wn_old = wp.n[0]
+    nw_i = np.empty(wp.i.shape[0], np.int32)
+    nw_s = np.empty(wp.i.shape[0], np.int32)
+    wcnt = build_wall_pairs(pos, balls.rad, balls.alive, seg, skin, nw_i, nw_s, balls.clear)
     if wcnt < 0:
         return 2, -wcnt
-    old_h = p_h[:n_old].copy()
-    merge_history(p_i, p_j, old_h, n_old, new_i, new_j, cnt, p_h, pos.shape[0])
-    nb = bond_i.shape[0]
+    old_h = pr.hist[:n_old].copy()
+    merge_history(pr.i, pr.j, old_h, n_old, new_i, new_j, cnt, pr.hist, pos.shape[0])
+    nb = bonds.i.shape[0]
     for k in range(cnt):
-        p_i[k] = new_i[k]
-        p_j[k] = new_j[k]
-        p_bond[k] = find_bond(bond_i, bond_j, new_i[k], new_j[k]) if nb > 0 else -1
-    p_n[0] = cnt
-    old_wh = w_h[:wn_old].copy()
-    merge_history(w_i, w_s, old_wh, wn_old, nw_i, nw_s, wcnt, w_h, pos.shape[0])
+        pr.i[k] = new_i[k]
+        pr.j[k] = new_j[k]
+        pr.bond[k] = find_bond(bonds.i, bonds.j, new_i[k], new_j[k]) if nb > 0 else -1
+    pr.n[0] = cnt
+    old_wh = wp.hist[:wn_old].copy()
+    merge_history(wp.i, wp.s, old_wh, wn_old, nw_i, nw_s, wcnt, wp.hist, pos.shape[0])
     for k in range(wcnt):
-        w_i[k] = nw_i[k]
-        w_s[k] = nw_s[k]
-    w_n[0] = wcnt
+        wp.i[k] = nw_i[k]
+        wp.s[k] = nw_s[k]
+    wp.n[0] = wcnt
     for i in range(pos.shape[0]):
-        pos0[i, 0] = pos[i, 0]
-        pos0[i, 1] = pos[i, 1]
+        balls.pos0[i, 0] = pos[i, 0]
+        balls.pos0[i, 1] = pos[i, 1]
     return 0, 0
 
 

@@ -12,17 +12,11 @@ ALPHA = 3         # default local damping of balls added later (per-ball array i
 ALPHA_CLUMP = 4   # default for clumps added later
 THICK = 5         # out-of-plane thickness t [m]
 SKIN = 6          # Verlet skin [m]
-LAW = 7           # contact law: 0 = PFC linear + dashpots, 1 = LAMMPS gran/hooke/history
 VMAX = 8          # runaway guard: max speed [m/s]
 XMIN = 9          # domain (ball centres must stay inside) [m]
 YMIN = 10
 XMAX = 11
 YMAX = 12
-H_KN = 13         # hooke/history law: kn [N/m]
-H_KT = 14         # kt [N/m]
-H_GN = 15         # gamma_n [1/s]
-H_GT = 16         # gamma_t [1/s]
-H_MU = 17         # mu [-]
 AUTO_DT = 18      # 1 = recompute dt = f*dt_crit at every neighbour rebuild
 DT_SAFETY = 19    # f [-]
 DSCALE = 20       # 1 = density scaling (inertial masses set so that dt_crit = dt/f)
@@ -32,15 +26,13 @@ SHIFT_X = 24      # common displacement estimate c (mean of the previous step) [
 SHIFT_Y = 25
 NPRM = 26
 
-LAW_PFC = 0
-LAW_HOOKE = 1
-
 # energy accumulator slots (``energy_acc`` array)
 E_DASHPOT = 0     # work dissipated by contact dashpots [J]
 E_FRICTION = 1    # work dissipated by Coulomb slip (contacts and broken FJ elements) [J]
 E_LOCAL = 2       # work dissipated by local damping [J]
 E_BREAKAGE = 3    # strain energy released when flat-joint elements break [J]
 E_WALLS = 4       # work done on balls by moving walls / velocity-controlled bodies [J]
+E_ROLLING = 5     # work dissipated by rolling resistance (plastic rolling and its dashpot) [J]
 NENERGY = 6
 
 # run-status codes returned by the stepping kernel

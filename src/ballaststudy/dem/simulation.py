@@ -17,12 +17,12 @@ from . import params as P
 from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
 from .clumps import mass_properties
-from .contacts import LC_E, LC_KAPPA, LC_NCOL
-from .engine import run_steps
+from .engine import rebuild_lists, run_steps
 from .integrate import critical_dt, reset_forces
+from .law import ContactLaw
 from .materials import ContactMaterial, FlatJointMaterial
-from .neighbours import rebuild
-from .state import Balls, Bonds, BreakLog, Clumps, Pairs, WallPairs, Walls
+from .state import Balls, Bonds, BreakLog, Clumps, Pairs, RunState, WallPairs, Walls
+from .submodels import contact_stiffness
 
 
 class SimulationError(RuntimeError):
@@ -45,9 +45,10 @@ class Simulation:
     skin : Verlet skin [m]; None = 0.5 * largest radius at the first run.
     domain : (xmin, ymin, xmax, ymax) ball centres must stay inside; None = bounding box
         of balls and walls at the first run, enlarged by half its size on every side.
-    law : "pfc" (linear + dashpots, the engine's law) or "hooke" (LAMMPS
+    law : a ``ContactLaw`` (sub-models, law.py), or "pfc" (= ContactLaw.pfc(): linear +
+        dashpots, the engine's law) or "hooke" (= ContactLaw.hooke(): LAMMPS
         gran/hooke/history, for the benchmark; then pass ``hooke=dict(kn, kt, gamma_n,
-        gamma_t, mu)``).
+        gamma_t, mu)`` as the coefficients of every material pair).
     n_elements : flat-joint elements per interface N (thesis N_r = 1).
     vmax : runaway guard [m/s].
     density_scaling : raise inertial masses so that the given ``dt`` is stable
@@ -70,28 +71,27 @@ class Simulation:
         p[P.DSCALE] = 1.0 if density_scaling else 0.0
         if density_scaling and dt is None:
             raise ValueError("density_scaling needs a fixed dt")
-        if law not in ("pfc", "hooke"):
-            raise ValueError(f"law must be 'pfc' or 'hooke', got {law!r}")
-        p[P.LAW] = P.LAW_HOOKE if law == "hooke" else P.LAW_PFC
-        if law == "hooke":
-            h = dict(hooke or {})
-            p[P.H_KN], p[P.H_KT] = h["kn"], h["kt"]
-            p[P.H_GN], p[P.H_GT], p[P.H_MU] = h["gamma_n"], h["gamma_t"], h["mu"]
+        if isinstance(law, str):
+            if law not in ("pfc", "hooke"):
+                raise ValueError(f"law must be 'pfc', 'hooke' or a ContactLaw, got {law!r}")
+            law = ContactLaw.pfc() if law == "pfc" else ContactLaw.hooke()
+        self.law = law
+        self._layout = law.layout()
         self.skin = skin
         self.domain = domain
         self.n_elements = int(n_elements)
         self.balls = Balls()
         self.walls = Walls()
         self.clumps = Clumps()
-        self.pairs = Pairs.empty(64)
-        self.wpairs = WallPairs.empty(64)
+        self.pairs = Pairs.empty(64, law.width)
+        self.wpairs = WallPairs.empty(64, law.width)
         self.bonds = self._empty_bonds()
         self.log = BreakLog()
         self.cnt = np.array([0, 0, 1], np.int64)      # step, neighbour builds, rebuild flag
         self.eacc = np.zeros(P.NENERGY)
         self.err = np.zeros(2)
-        self.lc = np.zeros((1, 1, LC_NCOL))
-        self.set_contact_material(ContactMaterial())
+        self.coef = np.zeros((1, 1, len(law.coefficients)))
+        self.set_contact_material(hooke if hooke is not None else ContactMaterial())
         self._prepared = False
 
     # ------------------------------------------------------------------ building
@@ -104,24 +104,40 @@ class Simulation:
         return b
 
     def set_contact_material(self, cm, mat_a=None, mat_b=None):
-        """Linear-contact parameters for materials (a, b) (symmetric); without ids: for
-        every pair of materials. Walls use ``Walls.mat`` ids from the same table."""
+        """Contact-law coefficients for materials (a, b) (symmetric); without ids: for
+        every pair of materials. ``cm``: a ContactMaterial or a dict of the law's
+        coefficient names (``self.law.coefficients``). Walls use ``Walls.mat`` ids from
+        the same table."""
+        row = self.law.row(cm.coefficients() if hasattr(cm, "coefficients") else cm)
         if mat_a is None:
-            self._lc_default = cm
-            self.lc[:, :] = cm.row()
+            self._default_row = row
+            self.coef[:, :] = row
             return
         self._ensure_materials(max(mat_a, mat_b) + 1)
-        self.lc[mat_a, mat_b] = cm.row()
-        self.lc[mat_b, mat_a] = cm.row()
+        self.coef[mat_a, mat_b] = row
+        self.coef[mat_b, mat_a] = row
+
+    def set_contact_coefficient(self, name, value, mat_a=None, mat_b=None):
+        """One coefficient of the law (e.g. "mu") for materials (a, b), or for every pair
+        of the materials there are now (materials added later get the default's)."""
+        c = self.law.column(name)
+        if mat_a is None:
+            self.coef[..., c] = value
+        else:
+            self._ensure_materials(max(mat_a, mat_b) + 1)
+            self.coef[mat_a, mat_b, c] = self.coef[mat_b, mat_a, c] = value
+
+    def contact_coefficient(self, name):
+        """The material-pair table of one coefficient, (n_materials, n_materials)."""
+        return self.coef[..., self.law.column(name)].copy()
 
     def _ensure_materials(self, n):
-        if self.lc.shape[0] < n:
-            d = self._lc_default
-            lc = np.empty((n, n, LC_NCOL))
-            lc[:, :] = d.row()
-            k = self.lc.shape[0]
-            lc[:k, :k] = self.lc
-            self.lc = lc
+        if self.coef.shape[0] < n:
+            coef = np.empty((n, n, self.coef.shape[2]))
+            coef[:, :] = self._default_row
+            k = self.coef.shape[0]
+            coef[:k, :k] = self.coef
+            self.coef = coef
 
     def add_balls(self, x, y, r, density, stone_id=-1, material_id=0, vx=0.0, vy=0.0,
                   omega=0.0):
@@ -328,6 +344,21 @@ class Simulation:
     def set_gravity(self, g):
         self.prm[P.GX], self.prm[P.GY] = g
 
+    @property
+    def gravity(self):
+        """Gravity vector [m/s^2]."""
+        return float(self.prm[P.GX]), float(self.prm[P.GY])
+
+    @property
+    def thickness(self):
+        """Out-of-plane thickness t [m]."""
+        return float(self.prm[P.THICK])
+
+    @property
+    def n_breakages(self):
+        """Flat-joint elements broken so far (rows of the breakage log)."""
+        return int(self.log.n[0])
+
     def _touch(self):
         self.cnt[2] = 1      # force a neighbour rebuild before the next step
 
@@ -371,28 +402,15 @@ class Simulation:
             reset_forces(p[P.GX], p[P.GY], b.mass, b.fext, b.force, b.moment, b.clump, b.alive)
         self._prepared = True
 
+    def _run_state(self):
+        return RunState(self.prm, self.cnt, self.err, self.eacc, self._layout, self.coef)
+
     def _rebuild(self):
-        b, pr, wp, bd, p = self.balls, self.pairs, self.wpairs, self.bonds, self.prm
-        while True:
-            st, need = rebuild(b.pos, b.rad, b.alive, b.clump, b.pos0, b.clear, p[P.SKIN],
-                               p[P.XMIN], p[P.YMIN], p[P.XMAX], p[P.YMAX], pr.i, pr.j,
-                               pr.hist, pr.bond, pr.n, bd.i, bd.j, self.walls.seg, wp.i, wp.s,
-                               wp.hist, wp.n)
-            if st == 0:
-                break
-            cap = need + need // 4 + 16
-            target = pr if st == 1 else wp
-            for name in ("i", "j", "s", "hist", "bond", "fn", "fs"):
-                if hasattr(target, name):
-                    a = getattr(target, name)
-                    g = np.zeros((cap,) + a.shape[1:], a.dtype)
-                    g[: a.shape[0]] = a
-                    setattr(target, name, g)
-        self.cnt[1] += 1
-        self.cnt[2] = 0
-        p[P.WALL_TRAVEL] = 0.0
-        p[P.SHIFT_X] = 0.0
-        p[P.SHIFT_Y] = 0.0
+        p = self.prm
+        pr, wp = rebuild_lists(self._run_state(), self.balls.kernel(), self.walls.kernel(),
+                               self.pairs.kernel(), self.wpairs.kernel(), self.bonds.kernel())
+        self.pairs.take(pr)
+        self.wpairs.take(wp)
         dtc = self.critical_dt()
         if p[P.AUTO_DT]:
             if dtc >= 1e30:
@@ -404,20 +422,18 @@ class Simulation:
     def _lonely_dt(self):
         """dt_crit when nothing is near anything yet: the lightest ball in one contact
         with its twin at the stiffest material (so the first contacts are safe)."""
-        b, p = self.balls, self.prm
+        b = self.balls
         live = b.alive == 1
-        if int(p[P.LAW]) == P.LAW_HOOKE:
-            k = p[P.H_KN] + p[P.H_KT]
-        else:
-            k = 2.0 * p[P.THICK] * (self.lc[..., LC_E] * (1 + 1 / self.lc[..., LC_KAPPA])).max()
+        r = float(b.rad[live].max())     # k_n of linear_pfc grows with R; hooke: constant
+        n = self.coef.shape[0]
+        k = max(sum(contact_stiffness(self._layout, self.coef, ma, mb, r, r, self.thickness)[:2])
+                for ma in range(n) for mb in range(n))
         return float(np.sqrt(b.mass[live].min() / k / 2.0))
 
     def critical_dt(self):
         """min sqrt(m/k_tr) and sqrt(I/k_rot) over the current Verlet lists and bonds."""
-        b, pr, wp, bd = self.balls, self.pairs, self.wpairs, self.bonds
-        return critical_dt(self.prm, b.rad, b.mass, b.inertia, b.minv, b.iinv, b.mat, b.clump,
-                           b.alive, pr.i, pr.j, pr.n[0], wp.i, wp.s, wp.n[0], self.walls.mat,
-                           bd.i, bd.j, bd.active, bd.rbar, bd.kn, bd.ks, self.lc)
+        return critical_dt(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
+                           self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
 
     def run(self, n_steps, callback=None, every=None):
         """Advance ``n_steps`` steps. With ``callback``, call ``callback(sim)`` every
@@ -436,24 +452,13 @@ class Simulation:
         return self
 
     def _run_kernel(self, k):
-        b, w, c, pr, wp, bd, lg = (self.balls, self.walls, self.clumps, self.pairs,
-                                   self.wpairs, self.bonds, self.log)
-        out = run_steps(k, self.prm, self.cnt, self.err, self.eacc, self.lc,
-                        b.pos, b.vel, b.omega, b.rad, b.mass, b.inertia, b.minv, b.iinv,
-                        b.force, b.moment, b.stone, b.mat, b.fix, b.clump, b.offset, b.alive,
-                        b.pos0, b.clear, b.fext, b.damp, w.seg, w.vel, w.omega, w.centre,
-                        w.force, w.moment, w.mat, w.link,
-                        c.pos, c.vel, c.omega, c.theta, c.mass, c.inertia, c.held,
-                        c.force, c.moment, c.damp,
-                        pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs, pr.n,
-                        wp.i, wp.s, wp.hist, wp.fn, wp.fs, wp.n,
-                        bd.i, bd.j, bd.active, bd.rbar, bd.d0, bd.gi, bd.kn, bd.ks, bd.sigc,
-                        bd.coh, bd.tanphi, bd.mu, bd.theta, bd.moment, bd.state, bd.fn, bd.fs,
-                        lg.step, lg.time, lg.bond, lg.elem, lg.i, lg.j, lg.stone, lg.mode,
-                        lg.x, lg.y, lg.stress, lg.n)
-        status = out[0]
-        pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs = out[2:8]
-        wp.i, wp.s, wp.hist, wp.fn, wp.fs = out[8:13]
+        b = self.balls
+        status, _, pr, wp = run_steps(k, self._run_state(), b.kernel(), self.walls.kernel(),
+                                      self.clumps.kernel(), self.pairs.kernel(),
+                                      self.wpairs.kernel(), self.bonds.kernel(),
+                                      self.log.kernel())
+        self.pairs.take(pr)
+        self.wpairs.take(wp)
         if status != P.OK:
             i, v = int(self.err[0]), float(self.err[1])
             raise SimulationError(

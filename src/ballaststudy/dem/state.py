@@ -1,8 +1,11 @@
 """State of a 2D DEM model: plain dataclasses of numpy arrays (no behaviour but growth).
 
-Kernels receive the arrays themselves; ``Simulation`` owns these objects and the checkpoint.
+Kernels receive each dataclass as one named container: ``obj.kernel()`` is a namedtuple of
+the same arrays (``<Class>Arrays``, fields in the dataclass's order), which numba passes as
+one argument. ``Simulation`` owns these objects and the checkpoint.
 Ball ids are stable: deleting a ball clears ``alive`` instead of compacting the arrays.
 """
+from collections import namedtuple
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -24,6 +27,15 @@ class _Arrays:
     @classmethod
     def from_dict(cls, d, prefix):
         return cls(**{f.name: np.array(d[prefix + f.name]) for f in fields(cls)})
+
+    def kernel(self):
+        """The arrays as the kernels' named container (no copies)."""
+        return self.Arrays(*(getattr(self, f.name) for f in fields(self)))
+
+    def take(self, arrays):
+        """Adopt the arrays of a container a kernel returned (lists it grew)."""
+        for f in fields(self):
+            setattr(self, f.name, getattr(arrays, f.name))
 
 
 def _z(*shape, dtype=np.float64):
@@ -123,10 +135,10 @@ class Clumps(_Arrays):
 
 @dataclass
 class Pairs(_Arrays):
-    """Verlet list of ball-ball pairs (i < j, grouped by ascending i) with contact history:
-    ``hist`` = shear force (PFC law, [0] along the tangent) or shear displacement vector
-    (hooke law); ``bond`` = flat-joint index of the pair or -1; ``fn``/``fs`` = last
-    normal/shear force (for output and energies)."""
+    """Verlet list of ball-ball pairs (i < j, grouped by ascending i). ``hist`` = the contact
+    law's per-contact columns: its sub-models' history (reset when the contact opens), then
+    their persistent state (law.ContactLaw.width); ``bond`` = flat-joint index of the pair or
+    -1; ``fn``/``fs`` = last normal/shear force (for output and energies)."""
     i: np.ndarray = _z(0, dtype=np.int32)
     j: np.ndarray = _z(0, dtype=np.int32)
     hist: np.ndarray = _z(0, 2)
@@ -136,15 +148,15 @@ class Pairs(_Arrays):
     n: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
 
     @classmethod
-    def empty(cls, cap):
-        return cls(np.zeros(cap, np.int32), np.zeros(cap, np.int32), np.zeros((cap, 2)),
+    def empty(cls, cap, width):
+        return cls(np.zeros(cap, np.int32), np.zeros(cap, np.int32), np.zeros((cap, width)),
                    np.full(cap, -1, np.int32), np.zeros(cap), np.zeros(cap),
                    np.zeros(1, np.int64))
 
 
 @dataclass
 class WallPairs(_Arrays):
-    """Verlet list of ball-segment pairs (sorted by (ball, segment)) with shear history."""
+    """Verlet list of ball-segment pairs (sorted by (ball, segment)), columns as Pairs."""
     i: np.ndarray = _z(0, dtype=np.int32)
     s: np.ndarray = _z(0, dtype=np.int32)
     hist: np.ndarray = _z(0, 2)
@@ -153,8 +165,8 @@ class WallPairs(_Arrays):
     n: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
 
     @classmethod
-    def empty(cls, cap):
-        return cls(np.zeros(cap, np.int32), np.zeros(cap, np.int32), np.zeros((cap, 2)),
+    def empty(cls, cap, width):
+        return cls(np.zeros(cap, np.int32), np.zeros(cap, np.int32), np.zeros((cap, width)),
                    np.zeros(cap), np.zeros(cap), np.zeros(1, np.int64))
 
 
@@ -212,3 +224,13 @@ class BreakLog(_Arrays):
             for f in fields(self):
                 if f.name != "n":
                     setattr(self, f.name, _grow(getattr(self, f.name), cap))
+
+
+for _cls in (Balls, Walls, Clumps, Pairs, WallPairs, Bonds, BreakLog):
+    _cls.Arrays = namedtuple(_cls.__name__ + "Arrays", [f.name for f in fields(_cls)])
+    _cls.Arrays.__module__ = __name__
+    globals()[_cls.Arrays.__name__] = _cls.Arrays     # importable by name (numba cache)
+
+# scalar run parameters (params.py), counters, error slot, energy accumulators, the contact
+# law's layout (submodels.py) and its material-pair coefficient table
+RunState = namedtuple("RunState", "prm cnt err eacc law coef")

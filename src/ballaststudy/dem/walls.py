@@ -1,16 +1,18 @@
 """Ball-segment contacts and kinematic wall motion.
 
 The wall plays body i (infinite mass, velocity of the segment at the contact point),
-the ball plays body j, so the same contact laws apply. PFC ball-facet stiffness:
-A = 2 R t, L = R (physics spec), effective mass m_c = m_ball (LAMMPS: m_eff = m_i).
+the ball plays body j, so the same contact law applies (submodels.contact_force).
+PFC ball-facet stiffness: A = 2 R t, L = R (physics spec), effective mass m_c = m_ball
+(LAMMPS: m_eff = m_i).
 """
 import math
 
 from numba import njit
 
 from . import params as P
-from .contacts import LC_BN, LC_BS, LC_E, LC_KAPPA, LC_MU, LC_NOTENSION, hooke_history, pfc_linear
+from .contacts import FAST, contact_opened
 from .neighbours import seg_closest
+from .submodels import WIDTH, contact_energy, contact_force
 
 
 @njit(cache=True, error_model="numpy")
@@ -50,78 +52,83 @@ def _joint_elsewhere(px, py, seg, link, s, u):
     return False
 
 
-@njit(cache=True, error_model="numpy")
-def wall_forces(prm, kin, rad, minv, mat, fa,
-                seg, wvel, womega, centre, wmat, link, wforce, wmoment,
-                w_i, w_s, w_h, w_fn, w_fs, nwp, lc, eacc):
-    """Add ball-segment forces to the balls; record force and moment on each segment."""
-    dt = prm[P.DT]
-    law = int(prm[P.LAW])
-    thick = prm[P.THICK]
+@njit(cache=True, error_model="numpy", inline="always")
+def wall_contact_point(kin, i, seg, link, s):
+    """Closest point (cx, cy) of segment s to ball i and the squared distance; d2 = inf if
+    the contact belongs to a neighbour segment (see _joint_elsewhere)."""
+    cx, cy, u = seg_closest(kin[i, 0], kin[i, 1], seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+    if _joint_elsewhere(kin[i, 0], kin[i, 1], seg, link, s, u):
+        return cx, cy, math.inf
+    return cx, cy, (kin[i, 0] - cx) ** 2 + (kin[i, 1] - cy) ** 2
+
+
+@njit(cache=True, error_model="numpy", fastmath=FAST)
+def wall_forces(run, kin, fa, walls, wp):
+    """Add ball-segment forces to the balls; record force and moment on each segment.
+    The segment is body i of the law (zero radius, infinite mass, its velocity at the
+    contact point); the ball is body j."""
+    law = run.law
+    coef = run.coef
+    dt = run.prm[P.DT]
+    thick = run.prm[P.THICK]
+    hw = law[WIDTH]
+    seg, link, wvel, womega, centre, wmat = (walls.seg, walls.link, walls.vel, walls.omega,
+                                             walls.centre, walls.mat)
+    wforce, wmoment = walls.force, walls.moment
+    w_i, w_s, hist, w_fn, w_fs = wp.i, wp.s, wp.hist, wp.fn, wp.fs   # out of the loop
     for s in range(seg.shape[0]):
         wforce[s, 0] = 0.0
         wforce[s, 1] = 0.0
         wmoment[s] = 0.0
     ed = 0.0
     ef = 0.0
+    er = 0.0
     ew = 0.0
-    for q in range(nwp):
+    for q in range(wp.n[0]):
         i = w_i[q]
         s = w_s[q]
-        cx, cy, u = seg_closest(kin[i, 0], kin[i, 1], seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
-        dx = kin[i, 0] - cx
-        dy = kin[i, 1] - cy
-        d2 = dx * dx + dy * dy
-        r = rad[i]
-        if d2 >= r * r or d2 == 0.0 or _joint_elsewhere(kin[i, 0], kin[i, 1], seg, link, s, u):
-            w_h[q, 0] = 0.0
-            w_h[q, 1] = 0.0
-            w_fn[q] = 0.0
-            w_fs[q] = 0.0
+        cx, cy, d2 = wall_contact_point(kin, i, seg, link, s)
+        r = kin[i, 5]
+        if d2 >= r * r or d2 == 0.0:
+            contact_opened(hist, w_fn, w_fs, q, hw)
             continue
         d = math.sqrt(d2)
-        delta = r - d
-        nx = dx / d
-        ny = dy / d
-        tx = -ny
-        ty = nx
+        nx = (kin[i, 0] - cx) / d
+        ny = (kin[i, 1] - cy) / d
         # wall velocity at the contact point
         wx = wvel[s, 0] - womega[s] * (cy - centre[s, 1])
         wy = wvel[s, 1] + womega[s] * (cx - centre[s, 0])
-        arm = r if law == P.LAW_HOOKE else r - 0.5 * delta
-        vrx = kin[i, 2] - wx - kin[i, 4] * arm * tx
-        vry = kin[i, 3] - wy - kin[i, 4] * arm * ty
-        vn = vrx * nx + vry * ny
-        mc = 1.0 / minv[i]
-        if law == P.LAW_HOOKE:
-            fn, fsx, fsy = hooke_history(delta, vn, vrx - vn * nx, vry - vn * ny, nx, ny,
-                                         prm[P.H_KN], prm[P.H_KT], prm[P.H_GN], prm[P.H_GT],
-                                         prm[P.H_MU], mc, dt, w_h, q)
-            ft = fsx * tx + fsy * ty
-        else:
-            ma = wmat[s]
-            mb = mat[i]
-            kn = 2.0 * thick * lc[ma, mb, LC_E]          # A E / L with A = 2 R t, L = R
-            ks = kn / lc[ma, mb, LC_KAPPA]
-            vt = vrx * tx + vry * ty
-            fn, ft, fnl, e1, e2 = pfc_linear(delta, vn, vt, kn, ks, lc[ma, mb, LC_MU],
-                                             lc[ma, mb, LC_BN], lc[ma, mb, LC_BS],
-                                             lc[ma, mb, LC_NOTENSION] > 0.0, mc, dt, w_h, q)
-            fsx = ft * tx
-            fsy = ft * ty
-            ed += e1
-            ef += e2
-        fx = fn * nx + fsx
-        fy = fn * ny + fsy
+        fx, fy, mi, mj, fn, ft, e1, e2, e3 = contact_force(
+            law, coef, wmat[s], int(kin[i, 7]), nx, ny, r - d, kin[i, 2] - wx,
+            kin[i, 3] - wy, 0.0, kin[i, 4], 0.0, r, 0.0, kin[i, 6], thick, dt, hist, q)
         fa[i, 0] += fx
         fa[i, 1] += fy
-        fa[i, 2] -= arm * ft
+        fa[i, 2] += mj
         wforce[s, 0] -= fx
         wforce[s, 1] -= fy
         wmoment[s] -= (cx - centre[s, 0]) * fy - (cy - centre[s, 1]) * fx
         ew += (fx * wx + fy * wy) * dt       # power of the wall on the ball
         w_fn[q] = fn
         w_fs[q] = ft
-    eacc[P.E_DASHPOT] += ed
-    eacc[P.E_FRICTION] += ef
-    eacc[P.E_WALLS] += ew
+        ed += e1
+        ef += e2
+        er += e3
+    run.eacc[P.E_DASHPOT] += ed
+    run.eacc[P.E_FRICTION] += ef
+    run.eacc[P.E_ROLLING] += er
+    run.eacc[P.E_WALLS] += ew
+
+
+@njit(cache=True, error_model="numpy")
+def wall_elastic_energy(run, kin, walls, wp):
+    """Strain energy in the springs of touching ball-segment contacts [J]."""
+    e = 0.0
+    for q in range(wp.n[0]):
+        i = wp.i[q]
+        s = wp.s[q]
+        cx, cy, d2 = wall_contact_point(kin, i, walls.seg, walls.link, s)
+        r = kin[i, 5]
+        if d2 < r * r and d2 > 0.0:
+            e += contact_energy(run.law, run.coef, walls.mat[s], int(kin[i, 7]),
+                                r - math.sqrt(d2), 0.0, r, run.prm[P.THICK], wp.hist, q)
+    return e

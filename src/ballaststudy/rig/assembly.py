@@ -14,8 +14,6 @@ Each stage is a few "fix"-like operations between engine runs; the engine does t
 import numpy as np
 
 from ..dem import ContactMaterial, Simulation
-from ..dem.contacts import LC_MU
-from ..dem.params import GY, THICK
 from .box import BoxRig, RigLayout
 
 STEEL = 2        # material id of the plate, loading ball and walls (same LC law, Table 4.2)
@@ -42,11 +40,11 @@ def assembly_conditions(rig, mu, on):
     masses. Returns the steps run (one: the first neighbour build gives dt_crit)."""
     p, sim = rig.params, rig.sim
     if not on:
-        sim.lc[..., LC_MU] = mu            # the loading contact has Table 4.2's mu too
+        sim.set_contact_coefficient("mu", mu)   # the loading contact has Table 4.2's mu too
         sim.set_density_scaling(None)
         return 0
     if p.assembly_friction is not None:
-        sim.lc[..., LC_MU] = p.assembly_friction
+        sim.set_contact_coefficient("mu", p.assembly_friction)
     if p.assembly_dt_factor <= 1.0:
         return 0
     sim.run(1)
@@ -235,7 +233,7 @@ def tamp(rig, progress=None):
     px = np.linspace(-0.5 * p.plate_width_m + rp, 0.5 * p.plate_width_m - rp, n)
     py = np.full(n, p.depth_m + rp)
     # mass/inertia of the solid rectangle (the pebble sums would count overlaps twice)
-    m = p.plate_density_kg_m3 * p.plate_width_m * p.plate_thickness_m * sim.prm[THICK]
+    m = p.plate_density_kg_m3 * p.plate_width_m * p.plate_thickness_m * sim.thickness
     inertia = m * (p.plate_width_m ** 2 + p.plate_thickness_m ** 2) / 12.0
     n0 = len(sim.balls)
     lay.plate = int(sim.add_clump(px, py, np.full(n, rp), p.plate_density_kg_m3, held=True,
@@ -293,7 +291,7 @@ def settle_plate(rig, progress=None):
         top = (b.pos[ids[under], 1] + b.rad[ids[under]]).max() if under.any() else 0.0
         gap = bottom - top
         f, _ = sim.clump_force(c)
-        carried = f[1] - m * sim.prm[GY]
+        carried = f[1] - m * sim.gravity[1]
         if carried >= m * p.gravity_m_s2:      # in contact (its weight at 9.81 m/s^2)
             break
         dt = sim.dt if sim.dt > 0 else 1e-6

@@ -13,7 +13,6 @@ import xarray as xr
 
 from ..atomic import atomic_path
 from ..dem import Simulation
-from ..dem.params import GY
 from .params import RigParams
 
 
@@ -55,7 +54,7 @@ class BoxRig:
         lb = self.layout.loading
         f, _ = self.sim.clump_force(lb)
         m = float(self.sim.clumps.mass[lb])
-        return float(f[1] - m * self.sim.prm[GY])   # minus its weight
+        return float(f[1] - m * self.sim.gravity[1])   # minus its weight
 
     def loading_y(self):
         return float(self.sim.clumps.pos[self.layout.loading, 1])
@@ -98,7 +97,7 @@ class BoxRig:
 
     def weight(self):
         """Total weight of live balls and clumps (plate, loading ball) [N] (positive)."""
-        b, c, g = self.sim.balls, self.sim.clumps, -self.sim.prm[GY]
+        b, c, g = self.sim.balls, self.sim.clumps, -self.sim.gravity[1]
         free = (b.alive == 1) & (b.clump < 0)
         return float((b.mass[free].sum() + c.mass.sum()) * g)
 

@@ -67,7 +67,7 @@ class LoadingRun:
         self.s = dict(phase="static", touched=False, target=0, win_sum=0.0, win_n=0, win_steps=0,
                       windows=0, direction=-1, cycle=0, f_prev=0.0, y_prev=0.0,
                       cyc_start=0, fmax=-1e300, fmin=1e300, y30=float("nan"),
-                      peak=None, log0=int(rig.sim.log.n[0]), step0=rig.sim.step,
+                      peak=None, log0=rig.sim.n_breakages, step0=rig.sim.step,
                       static_end_step=-1, y_ref=float("nan"), static_mean=[],
                       static_walls=[], win_bottom=0.0, win_side=0.0, cyc_sample0=0,
                       metrics_cfg=dict(metrics or {}), rows=[],
@@ -226,7 +226,7 @@ class LoadingRun:
         rig, s = self.rig, self.s
         px, py, pa = rig.plate_state()
         pk = s["peak"] or dict(y=np.nan, px=np.nan, py=np.nan, pa=np.nan, contacts=0)
-        modes = rig.sim.log.mode[s["log0"]: int(rig.sim.log.n[0])]
+        modes = rig.sim.log.mode[s["log0"]: rig.sim.n_breakages]
         row = dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s["cyc_start"],
                    force_max=s["fmax"], force_min=s["fmin"], y_at_settlement_force=s["y30"],
                    y_at_peak=pk["y"], y_at_end=y, plate_x_at_peak=pk["px"],

@@ -12,7 +12,6 @@ import numpy as np
 import xarray as xr
 
 from ..atomic import atomic_path
-from ..dem.params import THICK
 from .loading import CYCLE_FIELDS
 
 MODE_CODES = {1: "tension", 2: "shear"}
@@ -146,7 +145,7 @@ def to_dataset(run, attrs=None):
         "static_mean_forces_N": json.dumps(s["static_mean"]),
         "static_mean_wall_forces_N": json.dumps(s["static_walls"]),
         "flat_joint_elements_at_loading_start": n_bonds,
-        "thickness_m": float(rig.sim.prm[THICK]),
+        "thickness_m": rig.sim.thickness,
         "force_convention": "2D forces per thickness t (PFC2D); thesis loads applied directly",
         "rig_params_json": json.dumps(rig.params.to_dict()),
         "rig_layout_json": json.dumps(vars(lay)), **(attrs or {})})

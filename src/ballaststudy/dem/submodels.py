@@ -1,0 +1,218 @@
+"""Contact-law sub-models (numba kernels) and the one point where the law is dispatched.
+
+A contact law is a composition of four sub-models, one of each kind — normal, damping,
+tangential, rolling — as LAMMPS ``pair granular`` composes its ``GranSubMod`` classes.
+Each sub-model reads its coefficients from its block of columns of the material-pair table
+``coef[mat_a, mat_b, :]``, and may own a block of the per-contact history (reset to zero
+when the contact opens) and of the persistent per-contact state (kept while the pair stays
+in the Verlet list, carried over rebuilds and checkpointed). ``law`` (tuple of ints built by
+``law.ContactLaw.layout``) holds each kind's code and the first column of its blocks.
+
+Both contact loops (ball-ball, ball-wall) call ``contact_force`` with the contact frame and
+the raw kinematics; a wall plays body i with zero radius and infinite mass (minv = iinv = 0).
+Convention: n points from body i to body j, t = z x n; forces are those ON j; a moment is
+about the body's own centre.
+"""
+import math
+
+from numba import njit
+
+# kinds and the layout of the ``law`` tuple: law[kind] = code, law[COEF + kind] = first
+# coefficient column, law[HIST + kind] = first history column, law[STATE + kind] = first
+# state column (after the history columns of the per-contact array), law[WIDTH] = history width
+NORMAL, DAMPING, TANGENTIAL, ROLLING = 0, 1, 2, 3
+COEF, HIST, STATE, WIDTH = 4, 8, 12, 16
+LAW_SIZE = 17
+# the same as single constants: numba turns law[<global int>] into a static tuple access,
+# while law[C_NORMAL] would be a run-time index (a switch over the tuple) in the hot loop
+C_NORMAL, C_DAMPING, C_TANGENTIAL, C_ROLLING = 4, 5, 6, 7
+H_TANGENTIAL, H_ROLLING = 10, 11
+S_TANGENTIAL, S_ROLLING = 14, 15
+
+# sub-model codes, per kind (registered with names in law.py)
+NORMAL_LINEAR_PFC, NORMAL_HOOKE = 0, 1
+DAMPING_PFC_DASHPOT, DAMPING_MASS_VISCOUS = 0, 1
+TANGENTIAL_PFC_INCREMENTAL, TANGENTIAL_LAMMPS_HISTORY = 0, 1
+ROLLING_NONE = 0
+
+JIT = dict(cache=True, error_model="numpy", inline="always")
+
+
+# ---------------------------------------------------------------- normal
+@njit(**JIT)
+def normal_stiffness(law, coef, ma, mb, ri, rj, thick):
+    """k_n [N/m]. linear_pfc: A E*/L with A = 2 min(R) t, L = R1 + R2 (ball-facet, ri = 0:
+    A = 2 R t, L = R). hooke: the table's kn."""
+    c = coef[ma, mb, law[C_NORMAL]]
+    if law[NORMAL] == NORMAL_HOOKE:
+        return c
+    rmin = min(ri, rj) if ri > 0.0 else rj
+    return 2.0 * rmin * thick * c / (ri + rj)
+
+
+@njit(**JIT)
+def contact_arm_shift(law, delta):
+    """Distance from a body's surface to the contact point: PFC puts it in the middle of
+    the overlap; LAMMPS gran/hooke/history at the surface (arm = R)."""
+    if law[NORMAL] == NORMAL_HOOKE:
+        return 0.0
+    return 0.5 * delta
+
+
+# ---------------------------------------------------------------- damping
+@njit(**JIT)
+def damped_normal_force(law, coef, ma, mb, fnl, vn, kn, mc):
+    """Total normal force from the spring part ``fnl``. pfc_dashpot: -2 beta_n sqrt(m_c k_n)
+    v_n, the total clamped at zero if no_tension (PFC dashpot mode 1). mass_viscous
+    (LAMMPS dampflag 1): -m_eff gamma_n v_n, no clamp."""
+    o = law[C_DAMPING]
+    if law[DAMPING] == DAMPING_MASS_VISCOUS:
+        return fnl - mc * coef[ma, mb, o] * vn
+    fn = fnl - 2.0 * coef[ma, mb, o] * math.sqrt(mc * kn) * vn
+    if coef[ma, mb, o + 1] > 0.0 and fn < 0.0:
+        fn = 0.0      # no-tension: the dashpot may not make the contact pull
+    return fn
+
+
+# ---------------------------------------------------------------- tangential
+@njit(**JIT)
+def tangential_stiffness(law, coef, ma, mb, kn):
+    """k_s [N/m]: pfc_incremental k_n / kappa*; lammps_history the table's kt."""
+    c = coef[ma, mb, law[C_TANGENTIAL]]
+    if law[TANGENTIAL] == TANGENTIAL_LAMMPS_HISTORY:
+        return c
+    return kn / c
+
+
+@njit(**JIT)
+def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt, hist, p):
+    """Shear force along t; updates the history. Returns (F_t, dashpot work, slip work).
+
+    pfc_incremental (kappa, mu, beta_s; history: F_s): F_s <- F_s - k_s v_t dt, Coulomb
+    limit mu F_n^linear, shear dashpot -2 beta_s sqrt(m_c k_s) v_t only while sticking.
+    lammps_history (kt, gamma_t, mu; history: shear displacement vector xi, as
+    pair_gran_hooke_history.cpp): xi += v_t dt projected on the tangent plane,
+    F_t = -(kt xi + m_eff gamma_t v_t), |F_t| <= mu |F_n| with xi rescaled when sliding."""
+    o = law[C_TANGENTIAL]
+    h = law[H_TANGENTIAL]
+    if law[TANGENTIAL] == TANGENTIAL_LAMMPS_HISTORY:
+        gt = mc * coef[ma, mb, o + 1]
+        tx = -ny
+        ty = nx
+        vtx = vt * tx
+        vty = vt * ty
+        sx = hist[p, h] + vtx * dt
+        sy = hist[p, h + 1] + vty * dt
+        shrmag2 = sx * sx + sy * sy       # |xi| before the projection, as in LAMMPS
+        rsht = sx * nx + sy * ny          # keep xi in the tangent plane
+        sx -= rsht * nx
+        sy -= rsht * ny
+        fsx = -(ks * sx + gt * vtx)
+        fsy = -(ks * sy + gt * vty)
+        fs2 = fsx * fsx + fsy * fsy
+        fmax = coef[ma, mb, o + 2] * abs(fn)
+        e_slip = 0.0
+        if fs2 > fmax * fmax:             # squares: no sqrt unless sliding
+            e0 = sx * sx + sy * sy
+            if shrmag2 != 0.0:
+                r = fmax / math.sqrt(fs2)
+                sx = r * (sx + gt * vtx / ks) - gt * vtx / ks
+                sy = r * (sy + gt * vty / ks) - gt * vty / ks
+                fsx *= r
+                fsy *= r
+            else:
+                fsx = 0.0
+                fsy = 0.0
+            e_slip = 0.5 * ks * (e0 - sx * sx - sy * sy)
+        hist[p, h] = sx
+        hist[p, h + 1] = sy
+        ft = fsx * tx + fsy * ty
+        return ft, -(ft + ks * (sx * tx + sy * ty)) * vt * dt, e_slip
+    fs = hist[p, h] - ks * vt * dt
+    lim = coef[ma, mb, o + 1] * fnl
+    if abs(fs) > lim:
+        e_slip = lim * (abs(fs) - lim) / ks
+        fs = lim if fs > 0.0 else -lim
+        hist[p, h] = fs
+        return fs, 0.0, e_slip
+    hist[p, h] = fs
+    fsd = -2.0 * coef[ma, mb, o + 2] * math.sqrt(mc * ks) * vt
+    return fs + fsd, -fsd * vt * dt, 0.0
+
+
+@njit(**JIT)
+def tangential_energy(law, hist, p, ks):
+    """Elastic energy of the shear spring [J]."""
+    h = law[H_TANGENTIAL]
+    if law[TANGENTIAL] == TANGENTIAL_LAMMPS_HISTORY:
+        return 0.5 * ks * (hist[p, h] ** 2 + hist[p, h + 1] ** 2)
+    return 0.5 * hist[p, h] ** 2 / ks
+
+
+# ---------------------------------------------------------------- rolling
+@njit(**JIT)
+def rolling_stiffness(law, coef, ma, mb, ks, ri, rj):
+    """k_r [N m/rad] (0 without rolling resistance)."""
+    return 0.0
+
+
+@njit(**JIT)
+def rolling_moment(law, coef, ma, mb, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
+    """Rolling-resistance moment on j (on i: the opposite) and its dissipated work."""
+    return 0.0, 0.0
+
+
+@njit(**JIT)
+def rolling_energy(law, coef, ma, mb, ks, ri, rj, hist, p):
+    """Elastic energy of the rolling spring [J]."""
+    return 0.0
+
+
+# ---------------------------------------------------------------- the dispatch point
+@njit(**JIT)
+def contact_stiffness(law, coef, ma, mb, ri, rj, thick):
+    """(k_n, k_s, k_r) of a contact (ri = 0: a wall): the critical timestep's input."""
+    kn = normal_stiffness(law, coef, ma, mb, ri, rj, thick)
+    ks = tangential_stiffness(law, coef, ma, mb, kn)
+    return kn, ks, rolling_stiffness(law, coef, ma, mb, ks, ri, rj)
+
+
+@njit(**JIT)
+def contact_force(law, coef, ma, mb, nx, ny, delta, dvx, dvy, wi, wj, ri, rj, minv_i, minv_j,
+                  thick, dt, hist, p):
+    """Force of one touching contact (delta > 0). dv = v_j - v_i of the centres (a wall:
+    its velocity at the contact point), w = spins, ri = 0 and minv_i = 0 for a wall. Updates the
+    history and the persistent state (work dissipated by slip at this contact [J]).
+    Returns (fx, fy on j, moment on i, moment on j, F_n, F_t, dashpot work, slip work,
+    rolling work) of this step."""
+    tx = -ny
+    ty = nx
+    shift = contact_arm_shift(law, delta)
+    ai = ri - shift if ri > 0.0 else 0.0
+    aj = rj - shift
+    w = wi * ai + wj * aj
+    vrx = dvx - w * tx                    # relative velocity of j at the contact point
+    vry = dvy - w * ty
+    vn = vrx * nx + vry * ny
+    vt = vrx * tx + vry * ty
+    mc = 1.0 / (minv_i + minv_j)
+    kn = normal_stiffness(law, coef, ma, mb, ri, rj, thick)
+    ks = tangential_stiffness(law, coef, ma, mb, kn)
+    fnl = kn * delta
+    fn = damped_normal_force(law, coef, ma, mb, fnl, vn, kn, mc)
+    ft, e_dash, e_slip = tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks,
+                                          mc, dt, hist, p)
+    mr, e_roll = rolling_moment(law, coef, ma, mb, fn, ks, wj - wi, minv_i, minv_j, ri, rj,
+                                dt, hist, p)
+    e_dash -= (fn - fnl) * vn * dt
+    hist[p, law[WIDTH] + law[S_TANGENTIAL]] += e_slip   # unconditional: a branch was slower
+    return (fn * nx + ft * tx, fn * ny + ft * ty, -ai * ft - mr, -aj * ft + mr, fn, ft,
+            e_dash, e_slip, e_roll)
+
+
+@njit(**JIT)
+def contact_energy(law, coef, ma, mb, delta, ri, rj, thick, hist, p):
+    """Elastic energy stored in a touching contact: normal, shear and rolling springs [J]."""
+    kn, ks, kr = contact_stiffness(law, coef, ma, mb, ri, rj, thick)
+    return (0.5 * kn * delta * delta + tangential_energy(law, hist, p, ks)
+            + rolling_energy(law, coef, ma, mb, ks, ri, rj, hist, p))
