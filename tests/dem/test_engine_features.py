@@ -113,3 +113,26 @@ def test_per_body_damping():
     v0, v1 = sim.balls.vel[:, 1]
     assert math.isclose(v0, -9.81 * sim.time, rel_tol=1e-9)
     assert math.isclose(v1, 0.5 * v0, rel_tol=0.02), (v0, v1)   # first half step undamped (v = 0)
+
+
+def test_contact_state_slip_work_is_the_friction_dissipated_at_that_contact():
+    """Persistent per-contact state: a disk sliding on a wall (no dashpots, no damping)
+    dissipates all its friction at one contact; that contact's slip_work equals the
+    engine's friction total, and equals the kinetic energy lost (mu m g x)."""
+    from ballaststudy.dem import ContactMaterial
+    r, rho, mu, v0 = 0.01, 2650.0, 0.3, 0.5
+    sim = Simulation(gravity=(0.0, -9.81), domain=(-1, -1, 1, 1))
+    sim.set_contact_material(ContactMaterial(E=1e8, mu=mu))
+    sim.add_wall([(-0.5, 0.0), (0.5, 0.0)])
+    m = rho * np.pi * r * r
+    sim.add_balls(0.0, r - m * 9.81 / 2e8, r, rho, vx=v0)
+    sim.run(2000)
+    st = sim.contact_state()
+    e = sim.energies()
+    on_wall = st["j"] < 0
+    assert on_wall.sum() == 1
+    w = float(st["slip_work"][on_wall][0])
+    assert w > 0.0
+    assert abs(w - e["dissipated_friction"]) <= 1e-9 * w, (w, e["dissipated_friction"])
+    lost = 0.5 * m * v0 ** 2 - e["kinetic"]
+    assert abs(w - lost) <= 0.01 * lost, f"slip work {w:.6g} J vs kinetic energy lost {lost:.6g} J"

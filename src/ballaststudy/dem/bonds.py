@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from . import params as P
+from .jit import NO_NRT
 
 MODE_TENSION = 1
 MODE_SHEAR = 2
@@ -60,7 +61,7 @@ def _strip_sq(gc, th, a, b, compressed_only):
     return fb - fa
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NO_NRT)
 def bond_forces(run, kin, balls, fa, bonds, log):
     """Flat-joint forces, element failure (logged) and interface removal."""
     prm = run.prm

@@ -11,6 +11,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .jit import NO_NRT
+
 
 def mass_properties(x, y, r, rho, thick):
     """Pebble-sum mass, centre of mass and polar moment of inertia about it."""
@@ -22,7 +24,7 @@ def mass_properties(x, y, r, rho, thick):
     return mt, cx, cy, inertia
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NO_NRT)
 def place_pebbles(kin, balls, clumps):
     """Pebble position/velocity from the rigid motion of their clump."""
     offset = balls.offset
@@ -45,7 +47,7 @@ def place_pebbles(kin, balls, clumps):
         kin[i, 4] = comega[c]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NO_NRT)
 def gather_clumps(gx, gy, kin, fa, balls, clumps):
     """Clump force = weight + sum of pebble forces; moment about the centre of mass."""
     cpos = clumps.pos

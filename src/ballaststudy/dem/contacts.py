@@ -8,11 +8,8 @@ import math
 from numba import njit
 
 from . import params as P
+from .jit import LOOP
 from .submodels import WIDTH, contact_energy, contact_force
-
-# fastmath without nnan/ninf/reassoc: same binary -> same bits (run-to-run and across a
-# checkpoint restart), NaN still propagates to the guards
-FAST = {"arcp", "contract", "nsz", "afn"}
 
 
 @njit(cache=True, error_model="numpy")
@@ -40,7 +37,7 @@ def contact_opened(hist, fn, fs, p, width):
     fs[p] = 0.0
 
 
-@njit(cache=True, error_model="numpy", fastmath=FAST)
+@njit(**LOOP)
 def pair_forces(run, kin, fa, pr, b_active):
     """Add ball-ball contact forces of the Verlet list ``pr`` to fa = (fx, fy, mz) rows
     (kin: see ``pack_kinematics``); pairs joined by an active flat joint are skipped."""

@@ -12,6 +12,7 @@ import numpy as np
 from numba import njit
 
 from . import params as P
+from .jit import NO_NRT
 from .submodels import contact_stiffness
 
 
@@ -40,7 +41,7 @@ def _moved(i, kin, fa, balls, cx, cy, wt, wx, wy, d1, d2, near_wall):
     return d1, d2, near_wall
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NO_NRT)
 def first_half(prm, kin, fa, balls, clumps):
     """One pass per free ball over its packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m,
     material) and force row ``fa`` = (fx, fy, mz): half kick (held dofs keep their
@@ -99,7 +100,7 @@ def first_half(prm, kin, fa, balls, clumps):
     return d1, d2, near_wall, sx, sy, cnt
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NO_NRT)
 def pebbles_moved(prm, kin, fa, balls, d1, d2, near_wall):
     """After ``place_pebbles``: the same list check and force reset (external load only:
     the clump carries the weight) for pebbles."""
@@ -139,7 +140,7 @@ def _damped(f, v, alpha):
     return f
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NO_NRT)
 def second_half(prm, kin, fa, balls, clumps, eacc, err):
     """Local damping (per body: ``damp``, ``cdamp``; not on velocity-held dofs) + half
     kick; then the guards. Returns a status code and puts the offending ball id and

@@ -49,6 +49,10 @@ register(SubModel("tangential", "lammps_history", K.TANGENTIAL_LAMMPS_HISTORY,
                   ("kt", "gamma_t", "mu"), history=2, state=("slip_work",),
                   doc="shear displacement xi, kt [N/m], gamma_t [1/s], |F_t| <= mu |F_n|"))
 register(SubModel("rolling", "none", K.ROLLING_NONE, doc="no rolling resistance"))
+register(SubModel("rolling", "epsd", K.ROLLING_EPSD, ("mu_r", "kr_ratio", "eta_r"), history=1,
+                  state=("rolling_work",),
+                  doc="Ai et al. (2011) type C: k_r = kr_ratio k_s R_r^2, |M_r| <= mu_r R_r F_n, "
+                      "dashpot eta_r while elastic; rolling_work [J]"))
 
 
 class ContactLaw:

@@ -24,6 +24,9 @@ class ContactMaterial:
     beta_n: float = 0.0
     beta_s: float = 0.0
     no_tension: bool = True
+    mu_r: float = 0.0         # rolling friction (law with rolling="epsd") [-]
+    kr_ratio: float = 1.0     # rolling stiffness k_r / (k_s R_r^2) [-] (PFC rrlinear: 1)
+    eta_r: float = 0.0        # rolling dashpot ratio of critical [-]
 
     def coefficients(self):
         d = asdict(self)

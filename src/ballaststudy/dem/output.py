@@ -57,6 +57,19 @@ def contact_list(sim):
                 y=cat[3][:, 1])
 
 
+def contact_state(sim):
+    """Persistent per-contact state of the contact law's sub-models (e.g. slip_work,
+    rolling_work [J]) for every listed ball-ball and ball-wall pair: dict of arrays i, j
+    (j = -1 - segment for walls) and one array per state name (law.state_names)."""
+    pr, wp, law = sim.pairs, sim.wpairs, sim.law
+    n, m, h = int(pr.n[0]), int(wp.n[0]), law.history_width
+    out = dict(i=np.concatenate([pr.i[:n], wp.i[:m]]),
+               j=np.concatenate([pr.j[:n], -1 - wp.s[:m]]))
+    for c, name in enumerate(law.state_names):
+        out[name] = np.concatenate([pr.hist[:n, h + c], wp.hist[:m, h + c]])
+    return out
+
+
 def bond_list(sim):
     """Flat joints: i, j, active, per-element state (1 bonded) / normal force (tension +) /
     shear force, bending moment on j, accumulated relative rotation."""

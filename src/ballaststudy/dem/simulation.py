@@ -424,9 +424,9 @@ class Simulation:
         with its twin at the stiffest material (so the first contacts are safe)."""
         b = self.balls
         live = b.alive == 1
-        r = float(b.rad[live].max())     # k_n of linear_pfc grows with R; hooke: constant
+        r = float(b.rad[live].max())     # the stiffest contact: ball-facet (ri = 0), largest R
         n = self.coef.shape[0]
-        k = max(sum(contact_stiffness(self._layout, self.coef, ma, mb, r, r, self.thickness)[:2])
+        k = max(sum(contact_stiffness(self._layout, self.coef, ma, mb, 0.0, r, self.thickness)[:2])
                 for ma in range(n) for mb in range(n))
         return float(np.sqrt(b.mass[live].min() / k / 2.0))
 
@@ -519,6 +519,10 @@ class Simulation:
     def contact_list(self):
         """Contacts carrying force: i, j (wall: -1 - segment), fx, fy on j, x, y."""
         return output.contact_list(self)
+
+    def contact_state(self):
+        """Persistent per-contact state of the law's sub-models (slip_work, ...) [J]."""
+        return output.contact_state(self)
 
     def bond_list(self):
         """Flat joints with per-element state and forces."""

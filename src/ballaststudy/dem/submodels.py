@@ -33,7 +33,7 @@ S_TANGENTIAL, S_ROLLING = 14, 15
 NORMAL_LINEAR_PFC, NORMAL_HOOKE = 0, 1
 DAMPING_PFC_DASHPOT, DAMPING_MASS_VISCOUS = 0, 1
 TANGENTIAL_PFC_INCREMENTAL, TANGENTIAL_LAMMPS_HISTORY = 0, 1
-ROLLING_NONE = 0
+ROLLING_NONE, ROLLING_EPSD = 0, 1
 
 JIT = dict(cache=True, error_model="numpy", inline="always")
 
@@ -43,20 +43,18 @@ JIT = dict(cache=True, error_model="numpy", inline="always")
 def normal_stiffness(law, coef, ma, mb, ri, rj, thick):
     """k_n [N/m]. linear_pfc: A E*/L with A = 2 min(R) t, L = R1 + R2 (ball-facet, ri = 0:
     A = 2 R t, L = R). hooke: the table's kn."""
-    c = coef[ma, mb, law[C_NORMAL]]
-    if law[NORMAL] == NORMAL_HOOKE:
-        return c
-    rmin = min(ri, rj) if ri > 0.0 else rj
-    return 2.0 * rmin * thick * c / (ri + rj)
+    kn = coef[ma, mb, law[C_NORMAL]]
+    if law[NORMAL] == NORMAL_LINEAR_PFC:
+        rmin = min(ri, rj) if ri > 0.0 else rj
+        kn = 2.0 * rmin * thick * kn / (ri + rj)
+    return kn
 
 
 @njit(**JIT)
 def contact_arm_shift(law, delta):
     """Distance from a body's surface to the contact point: PFC puts it in the middle of
     the overlap; LAMMPS gran/hooke/history at the surface (arm = R)."""
-    if law[NORMAL] == NORMAL_HOOKE:
-        return 0.0
-    return 0.5 * delta
+    return 0.0 if law[NORMAL] == NORMAL_HOOKE else 0.5 * delta
 
 
 # ---------------------------------------------------------------- damping
@@ -67,10 +65,11 @@ def damped_normal_force(law, coef, ma, mb, fnl, vn, kn, mc):
     (LAMMPS dampflag 1): -m_eff gamma_n v_n, no clamp."""
     o = law[C_DAMPING]
     if law[DAMPING] == DAMPING_MASS_VISCOUS:
-        return fnl - mc * coef[ma, mb, o] * vn
-    fn = fnl - 2.0 * coef[ma, mb, o] * math.sqrt(mc * kn) * vn
-    if coef[ma, mb, o + 1] > 0.0 and fn < 0.0:
-        fn = 0.0      # no-tension: the dashpot may not make the contact pull
+        fn = fnl - mc * coef[ma, mb, o] * vn
+    else:
+        fn = fnl - 2.0 * coef[ma, mb, o] * math.sqrt(mc * kn) * vn
+        if coef[ma, mb, o + 1] > 0.0 and fn < 0.0:
+            fn = 0.0      # no-tension: the dashpot may not make the contact pull
     return fn
 
 
@@ -78,10 +77,10 @@ def damped_normal_force(law, coef, ma, mb, fnl, vn, kn, mc):
 @njit(**JIT)
 def tangential_stiffness(law, coef, ma, mb, kn):
     """k_s [N/m]: pfc_incremental k_n / kappa*; lammps_history the table's kt."""
-    c = coef[ma, mb, law[C_TANGENTIAL]]
-    if law[TANGENTIAL] == TANGENTIAL_LAMMPS_HISTORY:
-        return c
-    return kn / c
+    ks = coef[ma, mb, law[C_TANGENTIAL]]
+    if law[TANGENTIAL] == TANGENTIAL_PFC_INCREMENTAL:
+        ks = kn / ks
+    return ks
 
 
 @njit(**JIT)
@@ -127,17 +126,23 @@ def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt,
         hist[p, h] = sx
         hist[p, h + 1] = sy
         ft = fsx * tx + fsy * ty
-        return ft, -(ft + ks * (sx * tx + sy * ty)) * vt * dt, e_slip
-    fs = hist[p, h] - ks * vt * dt
-    lim = coef[ma, mb, o + 1] * fnl
-    if abs(fs) > lim:
-        e_slip = lim * (abs(fs) - lim) / ks
-        fs = lim if fs > 0.0 else -lim
+        e_dash = -(ft + ks * (sx * tx + sy * ty)) * vt * dt
+    else:
+        fs = hist[p, h] - ks * vt * dt
+        lim = coef[ma, mb, o + 1] * fnl
+        e_slip = 0.0
+        e_dash = 0.0
+        ft = fs
+        if abs(fs) > lim:
+            e_slip = lim * (abs(fs) - lim) / ks
+            fs = lim if fs > 0.0 else -lim
+            ft = fs
+        else:
+            fsd = -2.0 * coef[ma, mb, o + 2] * math.sqrt(mc * ks) * vt
+            ft = fs + fsd
+            e_dash = -fsd * vt * dt
         hist[p, h] = fs
-        return fs, 0.0, e_slip
-    hist[p, h] = fs
-    fsd = -2.0 * coef[ma, mb, o + 2] * math.sqrt(mc * ks) * vt
-    return fs + fsd, -fsd * vt * dt, 0.0
+    return ft, e_dash, e_slip
 
 
 @njit(**JIT)
@@ -145,27 +150,67 @@ def tangential_energy(law, hist, p, ks):
     """Elastic energy of the shear spring [J]."""
     h = law[H_TANGENTIAL]
     if law[TANGENTIAL] == TANGENTIAL_LAMMPS_HISTORY:
-        return 0.5 * ks * (hist[p, h] ** 2 + hist[p, h + 1] ** 2)
-    return 0.5 * hist[p, h] ** 2 / ks
+        e = 0.5 * ks * (hist[p, h] ** 2 + hist[p, h + 1] ** 2)
+    else:
+        e = 0.5 * hist[p, h] ** 2 / ks
+    return e
 
 
 # ---------------------------------------------------------------- rolling
 @njit(**JIT)
+def rolling_radius(ri, rj):
+    """R_r = R1 R2 / (R1 + R2); against a wall (ri = 0) the ball's R."""
+    return rj if ri == 0.0 else ri * rj / (ri + rj)
+
+
+@njit(**JIT)
 def rolling_stiffness(law, coef, ma, mb, ks, ri, rj):
-    """k_r [N m/rad] (0 without rolling resistance)."""
-    return 0.0
+    """k_r [N m/rad]: epsd k_r = kr_ratio k_s R_r^2 (kr_ratio = 1: PFC's rrlinear);
+    0 without rolling resistance."""
+    kr = 0.0
+    if law[ROLLING] == ROLLING_EPSD:
+        rr = rolling_radius(ri, rj)
+        kr = coef[ma, mb, law[C_ROLLING] + 1] * ks * rr * rr
+    return kr
 
 
 @njit(**JIT)
 def rolling_moment(law, coef, ma, mb, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
-    """Rolling-resistance moment on j (on i: the opposite) and its dissipated work."""
-    return 0.0, 0.0
+    """Rolling-resistance moment on j (on i: the opposite) and the work it dissipated.
+
+    epsd — elastic-plastic spring-dashpot, "type C" of Ai et al. (2011), Powder Technol.
+    206 (mu_r, kr_ratio, eta_r; history: the spring moment M_r; state: rolling_work [J]):
+    M_r <- M_r - k_r (w_j - w_i) dt, |M_r| <= mu_r R_r F_n (plastic rolling beyond); while
+    elastic a dashpot -eta_r 2 sqrt(I_r k_r) (w_j - w_i), none when fully mobilised
+    (their f = 0); 1/I_r = sum over the bodies of 1/(I + m R^2) = 1/(1.5 m R^2) for disks."""
+    m = 0.0
+    md = 0.0
+    work = 0.0
+    if law[ROLLING] == ROLLING_EPSD:
+        o = law[C_ROLLING]
+        h = law[H_ROLLING]
+        kr = rolling_stiffness(law, coef, ma, mb, ks, ri, rj)
+        m = hist[p, h] - kr * wrel * dt
+        lim = coef[ma, mb, o] * rolling_radius(ri, rj) * max(fn, 0.0)
+        if abs(m) > lim:
+            work = lim * (abs(m) - lim) / kr      # limit moment x plastic rotation
+            m = lim if m > 0.0 else -lim
+        elif coef[ma, mb, o + 2] > 0.0:
+            ir_inv = minv_j / (1.5 * rj * rj)
+            if ri > 0.0:
+                ir_inv += minv_i / (1.5 * ri * ri)
+            md = -2.0 * coef[ma, mb, o + 2] * math.sqrt(kr / ir_inv) * wrel
+            work = -md * wrel * dt
+        hist[p, h] = m
+        hist[p, law[WIDTH] + law[S_ROLLING]] += work
+    return m + md, work
 
 
 @njit(**JIT)
 def rolling_energy(law, coef, ma, mb, ks, ri, rj, hist, p):
     """Elastic energy of the rolling spring [J]."""
-    return 0.0
+    kr = rolling_stiffness(law, coef, ma, mb, ks, ri, rj)
+    return 0.5 * hist[p, law[H_ROLLING]] ** 2 / kr if kr > 0.0 else 0.0
 
 
 # ---------------------------------------------------------------- the dispatch point

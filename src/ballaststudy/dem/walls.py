@@ -10,12 +10,13 @@ import math
 from numba import njit
 
 from . import params as P
-from .contacts import FAST, contact_opened
+from .contacts import contact_opened
+from .jit import LOOP, NO_NRT
 from .neighbours import seg_closest
 from .submodels import WIDTH, contact_energy, contact_force
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**NO_NRT)
 def move_walls(seg, wvel, womega, centre, dt):
     """Rotate each segment about its centre by omega*dt, then translate by vel*dt.
     Returns the largest endpoint displacement (for the Verlet rebuild criterion)."""
@@ -62,7 +63,7 @@ def wall_contact_point(kin, i, seg, link, s):
     return cx, cy, (kin[i, 0] - cx) ** 2 + (kin[i, 1] - cy) ** 2
 
 
-@njit(cache=True, error_model="numpy", fastmath=FAST)
+@njit(**LOOP)
 def wall_forces(run, kin, fa, walls, wp):
     """Add ball-segment forces to the balls; record force and moment on each segment.
     The segment is body i of the law (zero radius, infinite mass, its velocity at the
