@@ -1,15 +1,16 @@
-"""The ball-ball pair loop: contact frame from the Verlet list, force from the law
-(submodels.contact_force, the one dispatch point), scatter onto both balls.
+"""Ball-ball contacts: the contact frame of a Verlet-list entry, its force from the law
+(submodels.contact_force, the one dispatch point), the loop that scatters it onto both balls.
 
 Convention: n points from ball i to ball j, t = z x n; forces are those ON j.
 """
 import math
 
+import numba
 from numba import njit
 
 from . import params as P
 from .jit import LOOP
-from .submodels import WIDTH, contact_energy, contact_force
+from .submodels import WIDTH, coefficient_row, contact_energy, contact_force, lf
 
 
 @njit(cache=True, error_model="numpy")
@@ -37,67 +38,85 @@ def contact_opened(hist, fn, fs, p, width):
     fs[p] = 0.0
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def pair_contact(law, c, thick, dt, kin, i, j, hist, p_fn, p_fs, p):
+    """Contact of list entry p between balls i < j (coefficient row ``c`` of their
+    materials): frame, force from the law, opening.
+    Returns (touching, fx, fy on j, moment on i, moment on j, dashpot, slip, rolling work)."""
+    dx = kin[j, 0] - kin[i, 0]
+    dy = kin[j, 1] - kin[i, 1]
+    d2 = dx * dx + dy * dy
+    ri = kin[i, 5]
+    rj = kin[j, 5]
+    rs = ri + rj
+    if d2 >= rs * rs:
+        contact_opened(hist, p_fn, p_fs, p, lf(law, WIDTH))
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    d = math.sqrt(d2)
+    rinv = 1.0 / d
+    nx = dx * rinv
+    ny = dy * rinv
+    fx, fy, mi, mj, fn, ft, e1, e2, e3 = contact_force(
+        law, c, nx, ny, rs - d,
+        kin[j, 2] - kin[i, 2], kin[j, 3] - kin[i, 3], kin[i, 4], kin[j, 4], ri, rj,
+        kin[i, 6], kin[j, 6], thick, dt, hist, p)
+    p_fn[p] = fn
+    p_fs[p] = ft
+    return True, fx, fy, mi, mj, e1, e2, e3
+
+
 @njit(**LOOP)
-def pair_forces(run, kin, fa, pr, b_active):
+def pair_forces(law, run, kin, fa, pr, b_active):
     """Add ball-ball contact forces of the Verlet list ``pr`` to fa = (fx, fy, mz) rows
-    (kin: see ``pack_kinematics``); pairs joined by an active flat joint are skipped."""
-    law = run.law
+    (kin: see ``pack_kinematics``); pairs joined by an active flat joint are skipped.
+    ``law``: the packed contact law, compiled as a constant (submodels.py)."""
+    numba.literally(law)
     coef = run.coef
     dt = run.prm[P.DT]
     thick = run.prm[P.THICK]
-    hw = law[WIDTH]
-    # arrays out of their containers once: an attribute read in the loop would cost a
-    # reference-count update per pair
+    # arrays out of their containers once (no per-pair attribute lookups)
     p_i, p_j, hist, p_bond, p_fn, p_fs = pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs
     bonds = b_active.shape[0] > 0
+    # coefficient row of the last material pair met: reloaded only when it changes
+    ma = -1
+    mb = -1
+    c = coefficient_row(coef, 0, 0)
     ed = 0.0
     ef = 0.0
     er = 0.0
     for p in range(pr.n[0]):
-        i = p_i[p]
-        j = p_j[p]
         if bonds:
             b = p_bond[p]
             if b >= 0 and b_active[b]:
                 continue                  # a flat joint replaces the contact
-        dx = kin[j, 0] - kin[i, 0]
-        dy = kin[j, 1] - kin[i, 1]
-        d2 = dx * dx + dy * dy
-        ri = kin[i, 5]
-        rj = kin[j, 5]
-        rs = ri + rj
-        if d2 >= rs * rs:
-            if p_fn[p] != 0.0 or p_fs[p] != 0.0 or hist[p, 0] != 0.0:
-                contact_opened(hist, p_fn, p_fs, p, hw)
-            continue
-        d = math.sqrt(d2)
-        rinv = 1.0 / d
-        nx = dx * rinv
-        ny = dy * rinv
-        fx, fy, mi, mj, fn, ft, e1, e2, e3 = contact_force(
-            law, coef, int(kin[i, 7]), int(kin[j, 7]), nx, ny, rs - d,
-            kin[j, 2] - kin[i, 2], kin[j, 3] - kin[i, 3], kin[i, 4], kin[j, 4], ri, rj,
-            kin[i, 6], kin[j, 6], thick, dt, hist, p)
-        fa[j, 0] += fx
-        fa[j, 1] += fy
-        fa[i, 0] -= fx
-        fa[i, 1] -= fy
-        fa[i, 2] += mi
-        fa[j, 2] += mj
-        p_fn[p] = fn
-        p_fs[p] = ft
-        ed += e1
-        ef += e2
-        er += e3
+        i = p_i[p]
+        j = p_j[p]
+        if int(kin[i, 7]) != ma or int(kin[j, 7]) != mb:
+            ma = int(kin[i, 7])
+            mb = int(kin[j, 7])
+            c = coefficient_row(coef, ma, mb)
+        touch, fx, fy, mi, mj, e1, e2, e3 = pair_contact(law, c, thick, dt, kin, i, j, hist,
+                                                         p_fn, p_fs, p)
+        if touch:
+            fa[j, 0] += fx
+            fa[j, 1] += fy
+            fa[i, 0] -= fx
+            fa[i, 1] -= fy
+            fa[i, 2] += mi
+            fa[j, 2] += mj
+            ed += e1
+            ef += e2
+            er += e3
     run.eacc[P.E_DASHPOT] += ed
     run.eacc[P.E_FRICTION] += ef
     run.eacc[P.E_ROLLING] += er
 
 
 @njit(cache=True, error_model="numpy")
-def pair_elastic_energy(run, balls, pr, b_active):
+def pair_elastic_energy(law, run, balls, pr, b_active):
     """Strain energy in the springs of touching ball-ball contacts [J] (flat-jointed
     pairs excluded: their energy is the bond's)."""
+    numba.literally(law)
     e = 0.0
     for p in range(pr.n[0]):
         i = pr.i[p]
@@ -111,6 +130,7 @@ def pair_elastic_energy(run, balls, pr, b_active):
         d = math.sqrt((balls.pos[j, 0] - balls.pos[i, 0]) ** 2
                       + (balls.pos[j, 1] - balls.pos[i, 1]) ** 2)
         if d < rs:
-            e += contact_energy(run.law, run.coef, balls.mat[i], balls.mat[j], rs - d, ri, rj,
+            e += contact_energy(law, coefficient_row(run.coef, balls.mat[i], balls.mat[j]),
+                                rs - d, ri, rj,
                                 run.prm[P.THICK], pr.hist, p)
     return e

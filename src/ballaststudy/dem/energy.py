@@ -27,13 +27,14 @@ def gravity_potential(sim):
 def contact_elastic(sim):
     """Strain energy in the springs (normal, shear, rolling) of ball-ball and ball-wall
     contacts, as the contact law defines it [J]."""
-    from .contacts import pack_kinematics, pair_elastic_energy
-    from .walls import wall_elastic_energy
-    run, b = sim._run_state(), sim.balls.kernel()
+    from .bound import elastic_energy
+    from .contacts import pack_kinematics
+    b = sim.balls.kernel()
     kin = np.empty((len(sim.balls), 8))
     pack_kinematics(b, kin)
-    return float(pair_elastic_energy(run, b, sim.pairs.kernel(), sim.bonds.active)
-                 + wall_elastic_energy(run, kin, sim.walls.kernel(), sim.wpairs.kernel()))
+    return float(elastic_energy(sim._layout)(sim._run_state(), b, kin, sim.pairs.kernel(),
+                                              sim.bonds.active, sim.walls.kernel(),
+                                              sim.wpairs.kernel()))
 
 
 def energies(sim):

@@ -1,5 +1,6 @@
 """Velocity Verlet (LAMMPS order: half kick, drift | forces | half kick), PFC local
-damping, guards, critical timestep and density scaling.
+damping, guards, critical timestep and density scaling. The per-ball halves are inline
+helpers shared by the chunk's first half step and the fused pass of step.py.
 
 Velocity-dependent forces (dashpots, local damping) see the half-step velocity, as in
 both LAMMPS's velocity Verlet and PFC's central-difference cycle.
@@ -8,12 +9,13 @@ second half kick; the stored ``force`` is the net force including it.
 """
 import math
 
+import numba
 import numpy as np
 from numba import njit
 
 from . import params as P
 from .jit import NO_NRT
-from .submodels import contact_stiffness
+from .submodels import coefficient_row, contact_stiffness
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -41,12 +43,67 @@ def _moved(i, kin, fa, balls, cx, cy, wt, wx, wy, d1, d2, near_wall):
     return d1, d2, near_wall
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def kick_drift(i, kin, fa, balls, h, dt):
+    """First half of a step for free ball i: half kick (held dofs keep their velocity),
+    drift."""
+    f = balls.fix[i]
+    if not (f & 1):
+        kin[i, 2] += h * fa[i, 0] * kin[i, 6]
+    if not (f & 2):
+        kin[i, 3] += h * fa[i, 1] * kin[i, 6]
+    if not (f & 4):
+        kin[i, 4] += h * fa[i, 2] * balls.iinv[i]
+    kin[i, 0] += dt * kin[i, 2]
+    kin[i, 1] += dt * kin[i, 3]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def damp_kick(i, kin, fa, balls, h, dt):
+    """Second half of a step for free ball i: PFC local damping of its net force (not on
+    velocity-held dofs; ``fa`` keeps the damped force), half kick. Returns the work done
+    by the damping [J]."""
+    f = balls.fix[i]
+    alpha = balls.damp[i]
+    el = 0.0
+    if alpha > 0.0:
+        if not (f & 1):
+            fx = _damped(fa[i, 0], kin[i, 2], alpha)
+            el -= (fx - fa[i, 0]) * kin[i, 2] * dt
+            fa[i, 0] = fx
+        if not (f & 2):
+            fy = _damped(fa[i, 1], kin[i, 3], alpha)
+            el -= (fy - fa[i, 1]) * kin[i, 3] * dt
+            fa[i, 1] = fy
+        if not (f & 4):
+            mz = _damped(fa[i, 2], kin[i, 4], alpha)
+            el -= (mz - fa[i, 2]) * kin[i, 4] * dt
+            fa[i, 2] = mz
+    if not (f & 1):
+        kin[i, 2] += h * fa[i, 0] * kin[i, 6]
+    if not (f & 2):
+        kin[i, 3] += h * fa[i, 1] * kin[i, 6]
+    if not (f & 4):
+        kin[i, 4] += h * fa[i, 2] * balls.iinv[i]
+    return el
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def in_domain(kin, i, x0, y0, x1, y1, vmax2):
+    """Guard pre-check of ball i, branch free; NaN fails every comparison."""
+    x = kin[i, 0]
+    y = kin[i, 1]
+    v2 = kin[i, 2] * kin[i, 2] + kin[i, 3] * kin[i, 3]
+    return ((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2)
+            & (abs(kin[i, 4]) < 1e300))
+
+
 @njit(**NO_NRT)
 def first_half(prm, kin, fa, balls, clumps):
     """One pass per free ball over its packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m,
-    material) and force row ``fa`` = (fx, fy, mz): half kick (held dofs keep their
-    velocity), drift, the displacement since the last neighbour build, force reset to
-    weight + external load. Then half kick + drift of clumps.
+    material) and force row ``fa`` = (fx, fy, mz): half kick, drift, the displacement since
+    the last neighbour build, force reset to weight + external load. Then half kick + drift
+    of clumps. (Inside a chunk, step.forces_and_kicks does this ball by ball.)
 
     Verlet-list validity (exact, by the triangle inequality): a pair not listed had a
     gap > skin, and |dx_i - dx_j| <= |dx_i - c| + |dx_j - c| for ANY common vector c;
@@ -74,21 +131,20 @@ def first_half(prm, kin, fa, balls, clumps):
             fa[i, 1] = 0.0
             fa[i, 2] = 0.0
             continue
-        f = balls.fix[i]
-        if not (f & 1):
-            kin[i, 2] += h * fa[i, 0] * balls.minv[i]
-        if not (f & 2):
-            kin[i, 3] += h * fa[i, 1] * balls.minv[i]
-        if not (f & 4):
-            kin[i, 4] += h * fa[i, 2] * balls.iinv[i]
-        kin[i, 0] += dt * kin[i, 2]
-        kin[i, 1] += dt * kin[i, 3]
+        kick_drift(i, kin, fa, balls, h, dt)
         sx += kin[i, 0] - balls.pos0[i, 0]
         sy += kin[i, 1] - balls.pos0[i, 1]
         cnt += 1
         m = balls.mass[i]
         d1, d2, near_wall = _moved(i, kin, fa, balls, cx, cy, wt, m * gx, m * gy, d1, d2,
                                    near_wall)
+    clumps_kick_drift(clumps, h, dt)
+    return d1, d2, near_wall, sx, sy, cnt
+
+
+@njit(**NO_NRT)
+def clumps_kick_drift(clumps, h, dt):
+    """First half of a step for the clumps (held ones keep their velocity)."""
     for c in range(clumps.pos.shape[0]):
         if not clumps.held[c]:
             clumps.vel[c, 0] += h * clumps.force[c, 0] / clumps.mass[c]
@@ -97,7 +153,6 @@ def first_half(prm, kin, fa, balls, clumps):
         clumps.pos[c, 0] += dt * clumps.vel[c, 0]
         clumps.pos[c, 1] += dt * clumps.vel[c, 1]
         clumps.theta[c] += dt * clumps.omega[c]
-    return d1, d2, near_wall, sx, sy, cnt
 
 
 @njit(**NO_NRT)
@@ -141,56 +196,37 @@ def _damped(f, v, alpha):
 
 
 @njit(**NO_NRT)
-def second_half(prm, kin, fa, balls, clumps, eacc, err):
-    """Local damping (per body: ``damp``, ``cdamp``; not on velocity-held dofs) + half
-    kick; then the guards. Returns a status code and puts the offending ball id and
-    value in err[0], err[1]."""
+def second_half(prm, kin, fa, balls, eacc):
+    """Local damping + half kick of every free ball; returns True if a ball may have
+    tripped a guard (then ``guards`` says which)."""
     dt = prm[P.DT]
     h = 0.5 * dt
-    el = 0.0
-    vmax2 = prm[P.VMAX] ** 2
     x0 = prm[P.XMIN]
-    x1 = prm[P.XMAX]
     y0 = prm[P.YMIN]
+    x1 = prm[P.XMAX]
     y1 = prm[P.YMAX]
-    minv = balls.minv
-    iinv = balls.iinv
+    vmax2 = prm[P.VMAX] * prm[P.VMAX]
+    el = 0.0
+    suspect = False
+    for i in range(kin.shape[0]):
+        if not balls.alive[i] or balls.clump[i] >= 0:
+            continue
+        el += damp_kick(i, kin, fa, balls, h, dt)
+        if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
+            suspect = True
+    eacc[P.E_LOCAL] += el
+    return suspect
+
+
+@njit(**NO_NRT)
+def clumps_damp_kick(clumps, h, dt):
+    """Second half of a step for the clumps: local damping + half kick. Returns the
+    damping work [J]."""
     cvel = clumps.vel
     comega = clumps.omega
     cforce = clumps.force
     cmoment = clumps.moment
-    suspect = cvel.shape[0] > 0          # pebbles are not checked in the loop below
-    for i in range(kin.shape[0]):
-        if not balls.alive[i] or balls.clump[i] >= 0:
-            continue
-        f = balls.fix[i]
-        alpha = balls.damp[i]
-        if alpha > 0.0:
-            if not (f & 1):
-                fx = _damped(fa[i, 0], kin[i, 2], alpha)
-                el -= (fx - fa[i, 0]) * kin[i, 2] * dt
-                fa[i, 0] = fx
-            if not (f & 2):
-                fy = _damped(fa[i, 1], kin[i, 3], alpha)
-                el -= (fy - fa[i, 1]) * kin[i, 3] * dt
-                fa[i, 1] = fy
-            if not (f & 4):
-                mz = _damped(fa[i, 2], kin[i, 4], alpha)
-                el -= (mz - fa[i, 2]) * kin[i, 4] * dt
-                fa[i, 2] = mz
-        if not (f & 1):
-            kin[i, 2] += h * fa[i, 0] * minv[i]
-        if not (f & 2):
-            kin[i, 3] += h * fa[i, 1] * minv[i]
-        if not (f & 4):
-            kin[i, 4] += h * fa[i, 2] * iinv[i]
-        # guard pre-check, branch free; NaN fails every comparison
-        x = kin[i, 0]
-        y = kin[i, 1]
-        v2 = kin[i, 2] * kin[i, 2] + kin[i, 3] * kin[i, 3]
-        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(kin[i, 4]) < 1e300)
-        if not ok:
-            suspect = True
+    el = 0.0
     for c in range(cvel.shape[0]):
         if clumps.held[c]:
             continue
@@ -207,10 +243,7 @@ def second_half(prm, kin, fa, balls, clumps, eacc, err):
         cvel[c, 0] += h * cforce[c, 0] / clumps.mass[c]
         cvel[c, 1] += h * cforce[c, 1] / clumps.mass[c]
         comega[c] += h * cmoment[c] / clumps.inertia[c]
-    eacc[P.E_LOCAL] += el
-    if suspect:
-        return guards(prm, kin, balls.alive, err)
-    return P.OK
+    return el
 
 
 @njit(cache=True, error_model="numpy")
@@ -224,12 +257,7 @@ def guards(prm, kin, alive, err):
     y1 = prm[P.YMAX]
     bad = -1
     for i in range(kin.shape[0]):
-        x = kin[i, 0]
-        y = kin[i, 1]
-        v2 = kin[i, 2] * kin[i, 2] + kin[i, 3] * kin[i, 3]
-        # every comparison is False for NaN, so "not (inside)" catches NaN/Inf too
-        ok = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (v2 <= vmax2) & (abs(kin[i, 4]) < 1e300)
-        if not ok and alive[i]:
+        if alive[i] and not in_domain(kin, i, x0, y0, x1, y1, vmax2):
             bad = i
             break
     if bad < 0:
@@ -251,12 +279,13 @@ def guards(prm, kin, alive, err):
 
 
 @njit(cache=True, error_model="numpy")
-def critical_dt(run, balls, pr, wp, wmat, bonds):
+def critical_dt(law, run, balls, pr, wp, wmat, bonds):
     """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) over every pair of the Verlet
     lists (touching or about to touch: conservative until the next rebuild) and bonds;
     k_tr sums k_n + k_s, k_rot sums k_s R^2 + k_r (the law's stiffnesses).
     With density scaling, inertial masses are raised to k_tr*(dt/f)^2 instead (never
     lowered below the real mass: PFC scales both ways; we only add inertia)."""
+    numba.literally(law)
     prm = run.prm
     rad = balls.rad
     mat = balls.mat
@@ -267,7 +296,8 @@ def critical_dt(run, balls, pr, wp, wmat, bonds):
     for p in range(pr.n[0]):
         i = pr.i[p]
         j = pr.j[p]
-        kn, ks, kr = contact_stiffness(run.law, run.coef, mat[i], mat[j], rad[i], rad[j], t)
+        kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, mat[i], mat[j]), rad[i],
+                                       rad[j], t)
         ktr[i] += kn + ks
         ktr[j] += kn + ks
         krot[i] += ks * rad[i] ** 2 + kr
@@ -275,7 +305,8 @@ def critical_dt(run, balls, pr, wp, wmat, bonds):
     for q in range(wp.n[0]):
         i = wp.i[q]
         r = rad[i]
-        kn, ks, kr = contact_stiffness(run.law, run.coef, wmat[wp.s[q]], mat[i], 0.0, r, t)
+        kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, wmat[wp.s[q]], mat[i]),
+                                       0.0, r, t)
         ktr[i] += kn + ks
         krot[i] += ks * r ** 2 + kr
     for b in range(bonds.i.shape[0]):

@@ -68,7 +68,12 @@ class ContactLaw:
                 known = sorted(n for k, n in SUBMODELS if k == kind)
                 raise ValueError(f"unknown {kind} sub-model {names[kind]!r} (known: {known})")
             self.parts.append(SUBMODELS[key])
+        for sm in self.parts[:2]:
+            if sm.history or sm.state:
+                raise ValueError(f"{sm.kind} sub-models own no history or state (got {sm.name})")
         cols = [c for sm in self.parts for c in sm.coefficients]
+        if len(cols) > K.NCOEF:
+            raise ValueError(f"contact law {names}: {len(cols)} coefficients, at most {K.NCOEF}")
         if len(set(cols)) != len(cols):
             raise ValueError(f"sub-models of one law share a coefficient name: {cols}")
         self.coefficients = tuple(cols)
@@ -99,26 +104,44 @@ class ContactLaw:
         return self.history_width + len(self.state_names)
 
     def layout(self):
-        """The tuple of ints the kernels read (submodels.py: codes and block offsets): a
-        tuple, not an array, so that numba keeps it in registers and the sub-model branches
-        are loop-invariant."""
-        lay = [0] * K.LAW_SIZE
+        """The packed int the kernels read (submodels.py: codes and block offsets, 4 bits
+        each), passed to them as a numba literal so that each law compiles to its own code."""
+        fields = [0] * K.N_FIELDS
         c = h = s = 0
+        first = {}
         for k, sm in enumerate(self.parts):
-            lay[k] = sm.code
-            lay[K.COEF + k], lay[K.HIST + k], lay[K.STATE + k] = c, h, s
+            fields[k] = sm.code
+            first[sm.kind] = (c, h, s)
             c += len(sm.coefficients)
             h += sm.history
             s += len(sm.state)
-        lay[K.WIDTH] = self.history_width
-        return tuple(int(v) for v in lay)
+        for kind, (cf, hf, sf) in (("damping", (K.C_DAMPING, None, None)),
+                                   ("tangential", (K.C_TANGENTIAL, K.H_TANGENTIAL, K.S_TANGENTIAL)),
+                                   ("rolling", (K.C_ROLLING, K.H_ROLLING, K.S_ROLLING))):
+            fields[cf] = first[kind][0]
+            if hf is not None:
+                fields[hf], fields[sf] = first[kind][1:]
+        fields[K.WIDTH] = self.history_width
+        key = 0
+        for k, v in enumerate(fields):
+            if not 0 <= v < 16:
+                raise ValueError(f"contact law {self.names}: layout field {k} = {v} does not fit 4 bits")
+            key |= v << (4 * k)
+        return key
+
+    def history_column(self, kind):
+        """First column of ``kind``'s history in the per-contact array (Pairs.hist): the
+        history blocks follow the order of the kinds, the state columns come after them."""
+        k = KINDS.index(kind)
+        return sum(sm.history for sm in self.parts[:k])
 
     def row(self, coefficients):
         """Table row from a dict of coefficients; every column of the law must be given."""
         missing = [c for c in self.coefficients if c not in coefficients]
         if missing:
             raise ValueError(f"contact law {self.names} needs coefficients {missing}")
-        return [float(coefficients[c]) for c in self.coefficients]
+        row = [float(coefficients[c]) for c in self.coefficients]
+        return row + [0.0] * (K.NCOEF - len(row))       # the table is NCOEF wide
 
     def column(self, name):
         if name not in self.coefficients:

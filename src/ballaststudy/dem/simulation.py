@@ -17,12 +17,13 @@ from . import params as P
 from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
 from .clumps import mass_properties
-from .engine import rebuild_lists, run_steps
-from .integrate import critical_dt, reset_forces
+from .bound import stepper, timestep
+from .engine import rebuild_lists
+from .integrate import reset_forces
 from .law import ContactLaw
 from .materials import ContactMaterial, FlatJointMaterial
 from .state import Balls, Bonds, BreakLog, Clumps, Pairs, RunState, WallPairs, Walls
-from .submodels import contact_stiffness
+from .submodels import NCOEF, contact_stiffness
 
 
 class SimulationError(RuntimeError):
@@ -90,7 +91,7 @@ class Simulation:
         self.cnt = np.array([0, 0, 1], np.int64)      # step, neighbour builds, rebuild flag
         self.eacc = np.zeros(P.NENERGY)
         self.err = np.zeros(2)
-        self.coef = np.zeros((1, 1, len(law.coefficients)))
+        self.coef = np.zeros((1, 1, NCOEF))
         self.set_contact_material(hooke if hooke is not None else ContactMaterial())
         self._prepared = False
 
@@ -403,7 +404,7 @@ class Simulation:
         self._prepared = True
 
     def _run_state(self):
-        return RunState(self.prm, self.cnt, self.err, self.eacc, self._layout, self.coef)
+        return RunState(self.prm, self.cnt, self.err, self.eacc, self.coef)
 
     def _rebuild(self):
         p = self.prm
@@ -426,13 +427,14 @@ class Simulation:
         live = b.alive == 1
         r = float(b.rad[live].max())     # the stiffest contact: ball-facet (ri = 0), largest R
         n = self.coef.shape[0]
-        k = max(sum(contact_stiffness(self._layout, self.coef, ma, mb, 0.0, r, self.thickness)[:2])
+        k = max(sum(contact_stiffness(self._layout, tuple(self.coef[ma, mb]), 0.0, r,
+                                      self.thickness)[:2])
                 for ma in range(n) for mb in range(n))
         return float(np.sqrt(b.mass[live].min() / k / 2.0))
 
     def critical_dt(self):
         """min sqrt(m/k_tr) and sqrt(I/k_rot) over the current Verlet lists and bonds."""
-        return critical_dt(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
+        return timestep(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
                            self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
 
     def run(self, n_steps, callback=None, every=None):
@@ -453,7 +455,7 @@ class Simulation:
 
     def _run_kernel(self, k):
         b = self.balls
-        status, _, pr, wp = run_steps(k, self._run_state(), b.kernel(), self.walls.kernel(),
+        status, _, pr, wp = stepper(self._layout)(k, self._run_state(), b.kernel(), self.walls.kernel(),
                                       self.clumps.kernel(), self.pairs.kernel(),
                                       self.wpairs.kernel(), self.bonds.kernel(),
                                       self.log.kernel())

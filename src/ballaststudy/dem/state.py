@@ -231,6 +231,7 @@ for _cls in (Balls, Walls, Clumps, Pairs, WallPairs, Bonds, BreakLog):
     _cls.Arrays.__module__ = __name__
     globals()[_cls.Arrays.__name__] = _cls.Arrays     # importable by name (numba cache)
 
-# scalar run parameters (params.py), counters, error slot, energy accumulators, the contact
-# law's layout (submodels.py) and its material-pair coefficient table
-RunState = namedtuple("RunState", "prm cnt err eacc law coef")
+# scalar run parameters (params.py), counters, error slot, energy accumulators and the
+# contact law's material-pair coefficient table (the law itself, a packed int, is passed to
+# the kernels beside it as a numba literal: submodels.py)
+RunState = namedtuple("RunState", "prm cnt err eacc coef")

@@ -5,7 +5,7 @@ tangential, rolling — as LAMMPS ``pair granular`` composes its ``GranSubMod`` 
 Each sub-model reads its coefficients from its block of columns of the material-pair table
 ``coef[mat_a, mat_b, :]``, and may own a block of the per-contact history (reset to zero
 when the contact opens) and of the persistent per-contact state (kept while the pair stays
-in the Verlet list, carried over rebuilds and checkpointed). ``law`` (tuple of ints built by
+in the Verlet list, carried over rebuilds and checkpointed). ``law`` (an int built by
 ``law.ContactLaw.layout``) holds each kind's code and the first column of its blocks.
 
 Both contact loops (ball-ball, ball-wall) call ``contact_force`` with the contact frame and
@@ -17,17 +17,36 @@ import math
 
 from numba import njit
 
-# kinds and the layout of the ``law`` tuple: law[kind] = code, law[COEF + kind] = first
-# coefficient column, law[HIST + kind] = first history column, law[STATE + kind] = first
-# state column (after the history columns of the per-contact array), law[WIDTH] = history width
+# ``law`` is one integer: 4-bit fields, field k at bits 4k..4k+3 (law.ContactLaw.layout packs
+# it). Kernels receive it as a numba literal (``numba.literally``): every field is then a
+# compile-time constant, each law gets its own machine code and the sub-model branches
+# vanish from the contact loops. Fields: the code of each kind, the first coefficient column
+# of damping/tangential/rolling (normal starts at 0), the first history and state column of
+# tangential/rolling (normal and damping own none), the history width.
 NORMAL, DAMPING, TANGENTIAL, ROLLING = 0, 1, 2, 3
-COEF, HIST, STATE, WIDTH = 4, 8, 12, 16
-LAW_SIZE = 17
-# the same as single constants: numba turns law[<global int>] into a static tuple access,
-# while law[C_NORMAL] would be a run-time index (a switch over the tuple) in the hot loop
-C_NORMAL, C_DAMPING, C_TANGENTIAL, C_ROLLING = 4, 5, 6, 7
-H_TANGENTIAL, H_ROLLING = 10, 11
-S_TANGENTIAL, S_ROLLING = 14, 15
+C_DAMPING, C_TANGENTIAL, C_ROLLING = 4, 5, 6
+H_TANGENTIAL, H_ROLLING, S_TANGENTIAL, S_ROLLING, WIDTH = 7, 8, 9, 10, 11
+N_FIELDS = 12
+C_NORMAL = 0
+# coefficient rows are fixed-width tuples (the table is padded): a tuple indexed by the
+# law's compile-time offsets is kept in registers, and a contact loop reloads it only when
+# the material pair changes
+NCOEF = 12
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def coefficient_row(coef, ma, mb):
+    """The coefficients of material pair (ma, mb) as a tuple of NCOEF floats."""
+    return (coef[ma, mb, 0], coef[ma, mb, 1], coef[ma, mb, 2], coef[ma, mb, 3],
+            coef[ma, mb, 4], coef[ma, mb, 5], coef[ma, mb, 6], coef[ma, mb, 7],
+            coef[ma, mb, 8], coef[ma, mb, 9], coef[ma, mb, 10], coef[ma, mb, 11])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def lf(law, field):
+    """Field ``field`` of the packed law."""
+    return (law >> (4 * field)) & 15
+
 
 # sub-model codes, per kind (registered with names in law.py)
 NORMAL_LINEAR_PFC, NORMAL_HOOKE = 0, 1
@@ -40,11 +59,11 @@ JIT = dict(cache=True, error_model="numpy", inline="always")
 
 # ---------------------------------------------------------------- normal
 @njit(**JIT)
-def normal_stiffness(law, coef, ma, mb, ri, rj, thick):
+def normal_stiffness(law, c, ri, rj, thick):
     """k_n [N/m]. linear_pfc: A E*/L with A = 2 min(R) t, L = R1 + R2 (ball-facet, ri = 0:
     A = 2 R t, L = R). hooke: the table's kn."""
-    kn = coef[ma, mb, law[C_NORMAL]]
-    if law[NORMAL] == NORMAL_LINEAR_PFC:
+    kn = c[C_NORMAL]
+    if lf(law, NORMAL) == NORMAL_LINEAR_PFC:
         rmin = min(ri, rj) if ri > 0.0 else rj
         kn = 2.0 * rmin * thick * kn / (ri + rj)
     return kn
@@ -54,37 +73,37 @@ def normal_stiffness(law, coef, ma, mb, ri, rj, thick):
 def contact_arm_shift(law, delta):
     """Distance from a body's surface to the contact point: PFC puts it in the middle of
     the overlap; LAMMPS gran/hooke/history at the surface (arm = R)."""
-    return 0.0 if law[NORMAL] == NORMAL_HOOKE else 0.5 * delta
+    return 0.0 if lf(law, NORMAL) == NORMAL_HOOKE else 0.5 * delta
 
 
 # ---------------------------------------------------------------- damping
 @njit(**JIT)
-def damped_normal_force(law, coef, ma, mb, fnl, vn, kn, mc):
+def damped_normal_force(law, c, fnl, vn, kn, mc):
     """Total normal force from the spring part ``fnl``. pfc_dashpot: -2 beta_n sqrt(m_c k_n)
     v_n, the total clamped at zero if no_tension (PFC dashpot mode 1). mass_viscous
     (LAMMPS dampflag 1): -m_eff gamma_n v_n, no clamp."""
-    o = law[C_DAMPING]
-    if law[DAMPING] == DAMPING_MASS_VISCOUS:
-        fn = fnl - mc * coef[ma, mb, o] * vn
+    o = lf(law, C_DAMPING)
+    if lf(law, DAMPING) == DAMPING_MASS_VISCOUS:
+        fn = fnl - mc * c[o] * vn
     else:
-        fn = fnl - 2.0 * coef[ma, mb, o] * math.sqrt(mc * kn) * vn
-        if coef[ma, mb, o + 1] > 0.0 and fn < 0.0:
+        fn = fnl - 2.0 * c[o] * math.sqrt(mc * kn) * vn
+        if c[o + 1] > 0.0 and fn < 0.0:
             fn = 0.0      # no-tension: the dashpot may not make the contact pull
     return fn
 
 
 # ---------------------------------------------------------------- tangential
 @njit(**JIT)
-def tangential_stiffness(law, coef, ma, mb, kn):
+def tangential_stiffness(law, c, kn):
     """k_s [N/m]: pfc_incremental k_n / kappa*; lammps_history the table's kt."""
-    ks = coef[ma, mb, law[C_TANGENTIAL]]
-    if law[TANGENTIAL] == TANGENTIAL_PFC_INCREMENTAL:
+    ks = c[lf(law, C_TANGENTIAL)]
+    if lf(law, TANGENTIAL) == TANGENTIAL_PFC_INCREMENTAL:
         ks = kn / ks
     return ks
 
 
 @njit(**JIT)
-def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt, hist, p):
+def tangential_force(law, c, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt, hist, p):
     """Shear force along t; updates the history. Returns (F_t, dashpot work, slip work).
 
     pfc_incremental (kappa, mu, beta_s; history: F_s): F_s <- F_s - k_s v_t dt, Coulomb
@@ -92,10 +111,10 @@ def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt,
     lammps_history (kt, gamma_t, mu; history: shear displacement vector xi, as
     pair_gran_hooke_history.cpp): xi += v_t dt projected on the tangent plane,
     F_t = -(kt xi + m_eff gamma_t v_t), |F_t| <= mu |F_n| with xi rescaled when sliding."""
-    o = law[C_TANGENTIAL]
-    h = law[H_TANGENTIAL]
-    if law[TANGENTIAL] == TANGENTIAL_LAMMPS_HISTORY:
-        gt = mc * coef[ma, mb, o + 1]
+    o = lf(law, C_TANGENTIAL)
+    h = lf(law, H_TANGENTIAL)
+    if lf(law, TANGENTIAL) == TANGENTIAL_LAMMPS_HISTORY:
+        gt = mc * c[o + 1]
         tx = -ny
         ty = nx
         vtx = vt * tx
@@ -109,7 +128,7 @@ def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt,
         fsx = -(ks * sx + gt * vtx)
         fsy = -(ks * sy + gt * vty)
         fs2 = fsx * fsx + fsy * fsy
-        fmax = coef[ma, mb, o + 2] * abs(fn)
+        fmax = c[o + 2] * abs(fn)
         e_slip = 0.0
         if fs2 > fmax * fmax:             # squares: no sqrt unless sliding
             e0 = sx * sx + sy * sy
@@ -129,7 +148,7 @@ def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt,
         e_dash = -(ft + ks * (sx * tx + sy * ty)) * vt * dt
     else:
         fs = hist[p, h] - ks * vt * dt
-        lim = coef[ma, mb, o + 1] * fnl
+        lim = c[o + 1] * fnl
         e_slip = 0.0
         e_dash = 0.0
         ft = fs
@@ -138,7 +157,7 @@ def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt,
             fs = lim if fs > 0.0 else -lim
             ft = fs
         else:
-            fsd = -2.0 * coef[ma, mb, o + 2] * math.sqrt(mc * ks) * vt
+            fsd = -2.0 * c[o + 2] * math.sqrt(mc * ks) * vt
             ft = fs + fsd
             e_dash = -fsd * vt * dt
         hist[p, h] = fs
@@ -148,8 +167,8 @@ def tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt,
 @njit(**JIT)
 def tangential_energy(law, hist, p, ks):
     """Elastic energy of the shear spring [J]."""
-    h = law[H_TANGENTIAL]
-    if law[TANGENTIAL] == TANGENTIAL_LAMMPS_HISTORY:
+    h = lf(law, H_TANGENTIAL)
+    if lf(law, TANGENTIAL) == TANGENTIAL_LAMMPS_HISTORY:
         e = 0.5 * ks * (hist[p, h] ** 2 + hist[p, h + 1] ** 2)
     else:
         e = 0.5 * hist[p, h] ** 2 / ks
@@ -164,18 +183,18 @@ def rolling_radius(ri, rj):
 
 
 @njit(**JIT)
-def rolling_stiffness(law, coef, ma, mb, ks, ri, rj):
+def rolling_stiffness(law, c, ks, ri, rj):
     """k_r [N m/rad]: epsd k_r = kr_ratio k_s R_r^2 (kr_ratio = 1: PFC's rrlinear);
     0 without rolling resistance."""
     kr = 0.0
-    if law[ROLLING] == ROLLING_EPSD:
+    if lf(law, ROLLING) == ROLLING_EPSD:
         rr = rolling_radius(ri, rj)
-        kr = coef[ma, mb, law[C_ROLLING] + 1] * ks * rr * rr
+        kr = c[lf(law, C_ROLLING) + 1] * ks * rr * rr
     return kr
 
 
 @njit(**JIT)
-def rolling_moment(law, coef, ma, mb, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
+def rolling_moment(law, c, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
     """Rolling-resistance moment on j (on i: the opposite) and the work it dissipated.
 
     epsd — elastic-plastic spring-dashpot, "type C" of Ai et al. (2011), Powder Technol.
@@ -186,44 +205,44 @@ def rolling_moment(law, coef, ma, mb, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, 
     m = 0.0
     md = 0.0
     work = 0.0
-    if law[ROLLING] == ROLLING_EPSD:
-        o = law[C_ROLLING]
-        h = law[H_ROLLING]
-        kr = rolling_stiffness(law, coef, ma, mb, ks, ri, rj)
+    if lf(law, ROLLING) == ROLLING_EPSD:
+        o = lf(law, C_ROLLING)
+        h = lf(law, H_ROLLING)
+        kr = rolling_stiffness(law, c, ks, ri, rj)
         m = hist[p, h] - kr * wrel * dt
-        lim = coef[ma, mb, o] * rolling_radius(ri, rj) * max(fn, 0.0)
+        lim = c[o] * rolling_radius(ri, rj) * max(fn, 0.0)
         if abs(m) > lim:
             work = lim * (abs(m) - lim) / kr      # limit moment x plastic rotation
             m = lim if m > 0.0 else -lim
-        elif coef[ma, mb, o + 2] > 0.0:
+        elif c[o + 2] > 0.0:
             ir_inv = minv_j / (1.5 * rj * rj)
             if ri > 0.0:
                 ir_inv += minv_i / (1.5 * ri * ri)
-            md = -2.0 * coef[ma, mb, o + 2] * math.sqrt(kr / ir_inv) * wrel
+            md = -2.0 * c[o + 2] * math.sqrt(kr / ir_inv) * wrel
             work = -md * wrel * dt
         hist[p, h] = m
-        hist[p, law[WIDTH] + law[S_ROLLING]] += work
+        hist[p, lf(law, WIDTH) + lf(law, S_ROLLING)] += work
     return m + md, work
 
 
 @njit(**JIT)
-def rolling_energy(law, coef, ma, mb, ks, ri, rj, hist, p):
+def rolling_energy(law, c, ks, ri, rj, hist, p):
     """Elastic energy of the rolling spring [J]."""
-    kr = rolling_stiffness(law, coef, ma, mb, ks, ri, rj)
-    return 0.5 * hist[p, law[H_ROLLING]] ** 2 / kr if kr > 0.0 else 0.0
+    kr = rolling_stiffness(law, c, ks, ri, rj)
+    return 0.5 * hist[p, lf(law, H_ROLLING)] ** 2 / kr if kr > 0.0 else 0.0
 
 
 # ---------------------------------------------------------------- the dispatch point
 @njit(**JIT)
-def contact_stiffness(law, coef, ma, mb, ri, rj, thick):
+def contact_stiffness(law, c, ri, rj, thick):
     """(k_n, k_s, k_r) of a contact (ri = 0: a wall): the critical timestep's input."""
-    kn = normal_stiffness(law, coef, ma, mb, ri, rj, thick)
-    ks = tangential_stiffness(law, coef, ma, mb, kn)
-    return kn, ks, rolling_stiffness(law, coef, ma, mb, ks, ri, rj)
+    kn = normal_stiffness(law, c, ri, rj, thick)
+    ks = tangential_stiffness(law, c, kn)
+    return kn, ks, rolling_stiffness(law, c, ks, ri, rj)
 
 
 @njit(**JIT)
-def contact_force(law, coef, ma, mb, nx, ny, delta, dvx, dvy, wi, wj, ri, rj, minv_i, minv_j,
+def contact_force(law, c, nx, ny, delta, dvx, dvy, wi, wj, ri, rj, minv_i, minv_j,
                   thick, dt, hist, p):
     """Force of one touching contact (delta > 0). dv = v_j - v_i of the centres (a wall:
     its velocity at the contact point), w = spins, ri = 0 and minv_i = 0 for a wall. Updates the
@@ -241,23 +260,23 @@ def contact_force(law, coef, ma, mb, nx, ny, delta, dvx, dvy, wi, wj, ri, rj, mi
     vn = vrx * nx + vry * ny
     vt = vrx * tx + vry * ty
     mc = 1.0 / (minv_i + minv_j)
-    kn = normal_stiffness(law, coef, ma, mb, ri, rj, thick)
-    ks = tangential_stiffness(law, coef, ma, mb, kn)
+    kn = normal_stiffness(law, c, ri, rj, thick)
+    ks = tangential_stiffness(law, c, kn)
     fnl = kn * delta
-    fn = damped_normal_force(law, coef, ma, mb, fnl, vn, kn, mc)
-    ft, e_dash, e_slip = tangential_force(law, coef, ma, mb, fnl, fn, vn, vt, nx, ny, kn, ks,
+    fn = damped_normal_force(law, c, fnl, vn, kn, mc)
+    ft, e_dash, e_slip = tangential_force(law, c, fnl, fn, vn, vt, nx, ny, kn, ks,
                                           mc, dt, hist, p)
-    mr, e_roll = rolling_moment(law, coef, ma, mb, fn, ks, wj - wi, minv_i, minv_j, ri, rj,
+    mr, e_roll = rolling_moment(law, c, fn, ks, wj - wi, minv_i, minv_j, ri, rj,
                                 dt, hist, p)
     e_dash -= (fn - fnl) * vn * dt
-    hist[p, law[WIDTH] + law[S_TANGENTIAL]] += e_slip   # unconditional: a branch was slower
+    hist[p, lf(law, WIDTH) + lf(law, S_TANGENTIAL)] += e_slip   # unconditional: a branch was slower
     return (fn * nx + ft * tx, fn * ny + ft * ty, -ai * ft - mr, -aj * ft + mr, fn, ft,
             e_dash, e_slip, e_roll)
 
 
 @njit(**JIT)
-def contact_energy(law, coef, ma, mb, delta, ri, rj, thick, hist, p):
+def contact_energy(law, c, delta, ri, rj, thick, hist, p):
     """Elastic energy stored in a touching contact: normal, shear and rolling springs [J]."""
-    kn, ks, kr = contact_stiffness(law, coef, ma, mb, ri, rj, thick)
+    kn, ks, kr = contact_stiffness(law, c, ri, rj, thick)
     return (0.5 * kn * delta * delta + tangential_energy(law, hist, p, ks)
-            + rolling_energy(law, coef, ma, mb, ks, ri, rj, hist, p))
+            + rolling_energy(law, c, ks, ri, rj, hist, p))

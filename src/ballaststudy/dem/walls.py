@@ -7,13 +7,14 @@ PFC ball-facet stiffness: A = 2 R t, L = R (physics spec), effective mass m_c = 
 """
 import math
 
+import numba
 from numba import njit
 
 from . import params as P
 from .contacts import contact_opened
 from .jit import LOOP, NO_NRT
 from .neighbours import seg_closest
-from .submodels import WIDTH, contact_energy, contact_force
+from .submodels import WIDTH, coefficient_row, contact_energy, contact_force, lf
 
 
 @njit(**NO_NRT)
@@ -63,24 +64,50 @@ def wall_contact_point(kin, i, seg, link, s):
     return cx, cy, (kin[i, 0] - cx) ** 2 + (kin[i, 1] - cy) ** 2
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def wall_contact(law, c, thick, dt, kin, i, walls, s, hist, w_fn, w_fs, q):
+    """Contact of wall-list entry q between ball i and segment s (coefficient row ``c`` of
+    their materials): the segment is body i of
+    the law (zero radius, infinite mass, its velocity at the contact point), the ball body
+    j. Adds the reaction to the segment's force and moment. Returns (fx, fy, moment on the
+    ball, dashpot, slip, rolling work, work of the wall on the ball); zeros if open."""
+    cx, cy, d2 = wall_contact_point(kin, i, walls.seg, walls.link, s)
+    r = kin[i, 5]
+    if d2 >= r * r or d2 == 0.0:
+        contact_opened(hist, w_fn, w_fs, q, lf(law, WIDTH))
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    d = math.sqrt(d2)
+    nx = (kin[i, 0] - cx) / d
+    ny = (kin[i, 1] - cy) / d
+    centre = walls.centre
+    wx = walls.vel[s, 0] - walls.omega[s] * (cy - centre[s, 1])
+    wy = walls.vel[s, 1] + walls.omega[s] * (cx - centre[s, 0])
+    fx, fy, mi, mj, fn, ft, e1, e2, e3 = contact_force(
+        law, c, nx, ny, r - d, kin[i, 2] - wx,
+        kin[i, 3] - wy, 0.0, kin[i, 4], 0.0, r, 0.0, kin[i, 6], thick, dt, hist, q)
+    walls.force[s, 0] -= fx
+    walls.force[s, 1] -= fy
+    walls.moment[s] -= (cx - centre[s, 0]) * fy - (cy - centre[s, 1]) * fx
+    w_fn[q] = fn
+    w_fs[q] = ft
+    return fx, fy, mj, e1, e2, e3, (fx * wx + fy * wy) * dt
+
+
 @njit(**LOOP)
-def wall_forces(run, kin, fa, walls, wp):
-    """Add ball-segment forces to the balls; record force and moment on each segment.
-    The segment is body i of the law (zero radius, infinite mass, its velocity at the
-    contact point); the ball is body j."""
-    law = run.law
+def wall_forces(law, run, kin, fa, walls, wp):
+    """Add ball-segment forces to the balls; record force and moment on each segment."""
+    numba.literally(law)
     coef = run.coef
     dt = run.prm[P.DT]
     thick = run.prm[P.THICK]
-    hw = law[WIDTH]
-    seg, link, wvel, womega, centre, wmat = (walls.seg, walls.link, walls.vel, walls.omega,
-                                             walls.centre, walls.mat)
-    wforce, wmoment = walls.force, walls.moment
-    w_i, w_s, hist, w_fn, w_fs = wp.i, wp.s, wp.hist, wp.fn, wp.fs   # out of the loop
-    for s in range(seg.shape[0]):
-        wforce[s, 0] = 0.0
-        wforce[s, 1] = 0.0
-        wmoment[s] = 0.0
+    w_i, w_s, hist, w_fn, w_fs = wp.i, wp.s, wp.hist, wp.fn, wp.fs
+    for s in range(walls.seg.shape[0]):
+        walls.force[s, 0] = 0.0
+        walls.force[s, 1] = 0.0
+        walls.moment[s] = 0.0
+    ma = -1
+    mb = -1
+    c = coefficient_row(coef, 0, 0)
     ed = 0.0
     ef = 0.0
     er = 0.0
@@ -88,32 +115,19 @@ def wall_forces(run, kin, fa, walls, wp):
     for q in range(wp.n[0]):
         i = w_i[q]
         s = w_s[q]
-        cx, cy, d2 = wall_contact_point(kin, i, seg, link, s)
-        r = kin[i, 5]
-        if d2 >= r * r or d2 == 0.0:
-            contact_opened(hist, w_fn, w_fs, q, hw)
-            continue
-        d = math.sqrt(d2)
-        nx = (kin[i, 0] - cx) / d
-        ny = (kin[i, 1] - cy) / d
-        # wall velocity at the contact point
-        wx = wvel[s, 0] - womega[s] * (cy - centre[s, 1])
-        wy = wvel[s, 1] + womega[s] * (cx - centre[s, 0])
-        fx, fy, mi, mj, fn, ft, e1, e2, e3 = contact_force(
-            law, coef, wmat[s], int(kin[i, 7]), nx, ny, r - d, kin[i, 2] - wx,
-            kin[i, 3] - wy, 0.0, kin[i, 4], 0.0, r, 0.0, kin[i, 6], thick, dt, hist, q)
+        if walls.mat[s] != ma or int(kin[i, 7]) != mb:
+            ma = walls.mat[s]
+            mb = int(kin[i, 7])
+            c = coefficient_row(coef, ma, mb)
+        fx, fy, mj, e1, e2, e3, e4 = wall_contact(law, c, thick, dt, kin, i, walls, s, hist,
+                                                  w_fn, w_fs, q)
         fa[i, 0] += fx
         fa[i, 1] += fy
         fa[i, 2] += mj
-        wforce[s, 0] -= fx
-        wforce[s, 1] -= fy
-        wmoment[s] -= (cx - centre[s, 0]) * fy - (cy - centre[s, 1]) * fx
-        ew += (fx * wx + fy * wy) * dt       # power of the wall on the ball
-        w_fn[q] = fn
-        w_fs[q] = ft
         ed += e1
         ef += e2
         er += e3
+        ew += e4
     run.eacc[P.E_DASHPOT] += ed
     run.eacc[P.E_FRICTION] += ef
     run.eacc[P.E_ROLLING] += er
@@ -121,8 +135,9 @@ def wall_forces(run, kin, fa, walls, wp):
 
 
 @njit(cache=True, error_model="numpy")
-def wall_elastic_energy(run, kin, walls, wp):
+def wall_elastic_energy(law, run, kin, walls, wp):
     """Strain energy in the springs of touching ball-segment contacts [J]."""
+    numba.literally(law)
     e = 0.0
     for q in range(wp.n[0]):
         i = wp.i[q]
@@ -130,6 +145,6 @@ def wall_elastic_energy(run, kin, walls, wp):
         cx, cy, d2 = wall_contact_point(kin, i, walls.seg, walls.link, s)
         r = kin[i, 5]
         if d2 < r * r and d2 > 0.0:
-            e += contact_energy(run.law, run.coef, walls.mat[s], int(kin[i, 7]),
+            e += contact_energy(law, coefficient_row(run.coef, walls.mat[s], int(kin[i, 7])),
                                 r - math.sqrt(d2), 0.0, r, run.prm[P.THICK], wp.hist, q)
     return e
