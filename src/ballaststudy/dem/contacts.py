@@ -10,7 +10,7 @@ from numba import njit
 
 from . import params as P
 from .jit import LOOP
-from .submodels import WIDTH, coefficient_row, contact_energy, contact_force, lf
+from .submodels import WIDTH, cached_row, coefficient_row, contact_energy, contact_force, lf
 
 
 @njit(cache=True, error_model="numpy")
@@ -77,10 +77,7 @@ def pair_forces(law, run, kin, fa, pr, b_active):
     # arrays out of their containers once (no per-pair attribute lookups)
     p_i, p_j, hist, p_bond, p_fn, p_fs = pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs
     bonds = b_active.shape[0] > 0
-    # coefficient row of the last material pair met: reloaded only when it changes
-    ma = -1
-    mb = -1
-    c = coefficient_row(coef, 0, 0)
+    c, ma, mb = coefficient_row(coef, 0, 0), -1, -1    # reloaded when the materials change
     ed = 0.0
     ef = 0.0
     er = 0.0
@@ -91,10 +88,7 @@ def pair_forces(law, run, kin, fa, pr, b_active):
                 continue                  # a flat joint replaces the contact
         i = p_i[p]
         j = p_j[p]
-        if int(kin[i, 7]) != ma or int(kin[j, 7]) != mb:
-            ma = int(kin[i, 7])
-            mb = int(kin[j, 7])
-            c = coefficient_row(coef, ma, mb)
+        c, ma, mb = cached_row(coef, c, ma, mb, int(kin[i, 7]), int(kin[j, 7]))
         touch, fx, fy, mi, mj, e1, e2, e3 = pair_contact(law, c, thick, dt, kin, i, j, hist,
                                                          p_fn, p_fs, p)
         if touch:

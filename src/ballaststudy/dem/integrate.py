@@ -44,9 +44,8 @@ def _moved(i, kin, fa, balls, cx, cy, wt, wx, wy, d1, d2, near_wall):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def kick_drift(i, kin, fa, balls, h, dt):
-    """First half of a step for free ball i: half kick (held dofs keep their velocity),
-    drift."""
+def _half_kick(i, kin, fa, balls, h):
+    """v += h F/m per degree of freedom of ball i, except the velocity-held ones."""
     f = balls.fix[i]
     if not (f & 1):
         kin[i, 2] += h * fa[i, 0] * kin[i, 6]
@@ -54,6 +53,12 @@ def kick_drift(i, kin, fa, balls, h, dt):
         kin[i, 3] += h * fa[i, 1] * kin[i, 6]
     if not (f & 4):
         kin[i, 4] += h * fa[i, 2] * balls.iinv[i]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def kick_drift(i, kin, fa, balls, h, dt):
+    """First half of a step for free ball i: half kick, drift."""
+    _half_kick(i, kin, fa, balls, h)
     kin[i, 0] += dt * kin[i, 2]
     kin[i, 1] += dt * kin[i, 3]
 
@@ -79,12 +84,7 @@ def damp_kick(i, kin, fa, balls, h, dt):
             mz = _damped(fa[i, 2], kin[i, 4], alpha)
             el -= (mz - fa[i, 2]) * kin[i, 4] * dt
             fa[i, 2] = mz
-    if not (f & 1):
-        kin[i, 2] += h * fa[i, 0] * kin[i, 6]
-    if not (f & 2):
-        kin[i, 3] += h * fa[i, 1] * kin[i, 6]
-    if not (f & 4):
-        kin[i, 4] += h * fa[i, 2] * balls.iinv[i]
+    _half_kick(i, kin, fa, balls, h)
     return el
 
 

@@ -43,6 +43,15 @@ def coefficient_row(coef, ma, mb):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def cached_row(coef, c, ma, mb, a, b):
+    """(row, ma, mb): the coefficient row ``c`` of materials (ma, mb), reloaded if the
+    contact at hand is between materials (a, b) instead. Start with ma = mb = -1."""
+    if a != ma or b != mb:
+        return coefficient_row(coef, a, b), a, b
+    return c, ma, mb
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def lf(law, field):
     """Field ``field`` of the packed law."""
     return (law >> (4 * field)) & 15

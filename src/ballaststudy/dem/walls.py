@@ -14,7 +14,7 @@ from . import params as P
 from .contacts import contact_opened
 from .jit import LOOP, NO_NRT
 from .neighbours import seg_closest
-from .submodels import WIDTH, coefficient_row, contact_energy, contact_force, lf
+from .submodels import WIDTH, cached_row, coefficient_row, contact_energy, contact_force, lf
 
 
 @njit(**NO_NRT)
@@ -105,9 +105,7 @@ def wall_forces(law, run, kin, fa, walls, wp):
         walls.force[s, 0] = 0.0
         walls.force[s, 1] = 0.0
         walls.moment[s] = 0.0
-    ma = -1
-    mb = -1
-    c = coefficient_row(coef, 0, 0)
+    c, ma, mb = coefficient_row(coef, 0, 0), -1, -1    # reloaded when the materials change
     ed = 0.0
     ef = 0.0
     er = 0.0
@@ -115,10 +113,7 @@ def wall_forces(law, run, kin, fa, walls, wp):
     for q in range(wp.n[0]):
         i = w_i[q]
         s = w_s[q]
-        if walls.mat[s] != ma or int(kin[i, 7]) != mb:
-            ma = walls.mat[s]
-            mb = int(kin[i, 7])
-            c = coefficient_row(coef, ma, mb)
+        c, ma, mb = cached_row(coef, c, ma, mb, walls.mat[s], int(kin[i, 7]))
         fx, fy, mj, e1, e2, e3, e4 = wall_contact(law, c, thick, dt, kin, i, walls, s, hist,
                                                   w_fn, w_fs, q)
         fa[i, 0] += fx
