@@ -208,7 +208,8 @@ def rolling_moment(law, c, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
 
     epsd — elastic-plastic spring-dashpot, "type C" of Ai et al. (2011), Powder Technol.
     206 (mu_r, kr_ratio, eta_r; history: the spring moment M_r; state: rolling_work [J]):
-    M_r <- M_r - k_r (w_j - w_i) dt, |M_r| <= mu_r R_r F_n (plastic rolling beyond); while
+    M_r <- M_r - k_r (w_j - w_i) dt, |M_r| <= mu_r R_r F_n (plastic rolling beyond; F_n the
+    normal spring force, as the Coulomb limit of pfc_incremental and PFC's rrlinear); while
     elastic a dashpot -eta_r 2 sqrt(I_r k_r) (w_j - w_i), none when fully mobilised
     (their f = 0); 1/I_r = sum over the bodies of 1/(I + m R^2) = 1/(1.5 m R^2) for disks."""
     m = 0.0
@@ -275,7 +276,7 @@ def contact_force(law, c, nx, ny, delta, dvx, dvy, wi, wj, ri, rj, minv_i, minv_
     fn = damped_normal_force(law, c, fnl, vn, kn, mc)
     ft, e_dash, e_slip = tangential_force(law, c, fnl, fn, vn, vt, nx, ny, kn, ks,
                                           mc, dt, hist, p)
-    mr, e_roll = rolling_moment(law, c, fn, ks, wj - wi, minv_i, minv_j, ri, rj,
+    mr, e_roll = rolling_moment(law, c, fnl, ks, wj - wi, minv_i, minv_j, ri, rj,
                                 dt, hist, p)
     e_dash -= (fn - fnl) * vn * dt
     hist[p, lf(law, WIDTH) + lf(law, S_TANGENTIAL)] += e_slip   # unconditional: a branch was slower
