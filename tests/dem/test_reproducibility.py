@@ -2,25 +2,7 @@
 import numpy as np
 import pytest
 
-from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation, SimulationError
-from ballaststudy.dem.generate import random_disks
-
-
-def model(seed, law="pfc"):
-    """Small but complete: bonded stones, a free clump, a moving wall, damping."""
-    kw = {} if law == "pfc" else dict(law="hooke", dt=2e-5, hooke=dict(
-        kn=1e6, kt=2e6 / 7, gamma_n=2000.0, gamma_t=1000.0, mu=0.5))
-    sim = Simulation(gravity=(0, -9.81), damping=0.3, domain=(-0.05, -0.05, 0.25, 0.5), **kw)
-    if law == "pfc":
-        sim.set_contact_material(ContactMaterial(E=1e7, mu=0.5, beta_n=0.2, beta_s=0.1))
-    sim.add_wall([(0, 0.3), (0, 0), (0.2, 0), (0.2, 0.3)], segments=3)
-    top = sim.add_wall([(0.0, 0.28), (0.2, 0.28)])
-    sim.set_wall_velocity(top, (0.0, -0.2))
-    x, y, r, vx, vy = random_disks(80, 0.0, 0.2, 0.01, 0.004, 0.006, seed=seed, vmax=0.2)
-    sim.add_balls(x, y, r, 2650.0, stone_id=np.arange(80) // 8, vx=vx, vy=vy)
-    sim.install_flat_joints(FlatJointMaterial(E=1e7, sigma_c=2e4, c=2e4, gap_factor=3.0))
-    sim.add_clump([0.09, 0.11], [0.2, 0.2], [0.008, 0.008], 2650.0)
-    return sim
+from ballaststudy.dem import Simulation, SimulationError
 
 
 STATE = ("pos", "vel", "omega", "force", "moment")
@@ -33,8 +15,8 @@ def snapshot(sim):
 
 
 @pytest.mark.parametrize("law", ["pfc", "hooke"])
-def test_case14_checkpoint_restart_is_bitwise(tmp_path, law):
-    ref = model(1, law)
+def test_case14_checkpoint_restart_is_bitwise(tmp_path, law, small_model):
+    ref = small_model(1, law)
     ref.run(1500, callback=lambda s: None, every=500)
     path = tmp_path / "ck.npz"
     ref.save_checkpoint(path)
@@ -49,16 +31,16 @@ def test_case14_checkpoint_restart_is_bitwise(tmp_path, law):
     assert ref.energies() == again.energies()
 
 
-def test_case15_seeds():
-    a, b, c = model(7), model(7), model(8)
+def test_case15_seeds(small_model):
+    a, b, c = small_model(7), small_model(7), small_model(8)
     for s in (a, b, c):
         s.run(800)
     assert all(np.array_equal(u, v) for u, v in zip(snapshot(a), snapshot(b))), "same seed differs"
     assert not np.array_equal(a.balls.pos, c.balls.pos), "different seeds gave the same state"
 
 
-def test_guards_stop_with_clear_message_and_checkpoint_stays_usable(tmp_path):
-    sim = model(3)
+def test_guards_stop_with_clear_message_and_checkpoint_stays_usable(tmp_path, small_model):
+    sim = small_model(3)
     sim.run(200)
     path = tmp_path / "last.npz"
     sim.save_checkpoint(path)
@@ -78,8 +60,8 @@ def test_guards_stop_with_clear_message_and_checkpoint_stays_usable(tmp_path):
     assert ok.step == 300
 
 
-def test_callbacks_delete_balls_and_scale_bonds():
-    sim = model(4)
+def test_callbacks_delete_balls_and_scale_bonds(small_model):
+    sim = small_model(4)
     seen = []
 
     def rig(s):

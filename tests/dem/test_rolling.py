@@ -18,8 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation
-from ballaststudy.dem.generate import random_disks
+from ballaststudy.dem import ContactMaterial, Simulation
 from ballaststudy.dem.law import ContactLaw
 
 R, RHO, G, E = 0.01, 2650.0, 9.81, 1.0e8
@@ -264,23 +263,6 @@ def test_energy_balance_with_rolling_dissipation():
 
 
 # ------------------------------------------------------------------ 4. checkpoint
-def rolling_model(seed):
-    """Small but complete (as test_reproducibility.model): bonded stones, a free clump, a
-    moving wall, damping; rolling resistance with its dashpot."""
-    sim = Simulation(gravity=(0, -9.81), damping=0.3, domain=(-0.05, -0.05, 0.25, 0.5),
-                     law=epsd())
-    sim.set_contact_material(ContactMaterial(E=1e7, mu=0.5, beta_n=0.2, beta_s=0.1, mu_r=0.15,
-                                             kr_ratio=1.0, eta_r=0.1))
-    sim.add_wall([(0, 0.3), (0, 0), (0.2, 0), (0.2, 0.3)], segments=3)
-    top = sim.add_wall([(0.0, 0.28), (0.2, 0.28)])
-    sim.set_wall_velocity(top, (0.0, -0.2))
-    x, y, r, vx, vy = random_disks(80, 0.0, 0.2, 0.01, 0.004, 0.006, seed=seed, vmax=0.2)
-    sim.add_balls(x, y, r, 2650.0, stone_id=np.arange(80) // 8, vx=vx, vy=vy)
-    sim.install_flat_joints(FlatJointMaterial(E=1e7, sigma_c=2e4, c=2e4, gap_factor=3.0))
-    sim.add_clump([0.09, 0.11], [0.2, 0.2], [0.008, 0.008], 2650.0)
-    return sim
-
-
 def rolling_state(sim):
     b, p, q = sim.balls, sim.pairs, sim.wpairs
     return dict(pos=b.pos.copy(), vel=b.vel.copy(), omega=b.omega.copy(),
@@ -297,9 +279,10 @@ def rolling_contacts(sim):
     return (np.count_nonzero(p.hist[:p.n[0], c]) + np.count_nonzero(q.hist[:q.n[0], c]))
 
 
-def test_checkpoint_restart_is_bitwise_with_rolling_law(tmp_path):
+def test_checkpoint_restart_is_bitwise_with_rolling_law(tmp_path, small_model):
     k, more = 2500, 1500          # by step 2500 the bed has landed: rolling moments exist
-    ref = rolling_model(1)
+    ref = small_model(1, epsd(), ContactMaterial(E=1e7, mu=0.5, beta_n=0.2, beta_s=0.1,
+                                                 mu_r=0.15, kr_ratio=1.0, eta_r=0.1))
     ref.run(k, callback=lambda s: None, every=500)
     at_save = rolling_contacts(ref)
     assert at_save > 5, f"only {at_save} contacts carry a rolling moment at the checkpoint: " \

@@ -65,6 +65,14 @@ def pair_contact(law, c, thick, dt, kin, i, j, hist, p_fn, p_fs, p):
     return True, fx, fy, mi, mj, e1, e2, e3
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def book_contact_work(eacc, dashpot, slip, rolling):
+    """Add a contact loop's dissipated work to the energy accumulators [J]."""
+    eacc[P.E_DASHPOT] += dashpot
+    eacc[P.E_FRICTION] += slip
+    eacc[P.E_ROLLING] += rolling
+
+
 @njit(**LOOP)
 def pair_forces(law, run, kin, fa, pr, b_active):
     """Add ball-ball contact forces of the Verlet list ``pr`` to fa = (fx, fy, mz) rows
@@ -101,9 +109,7 @@ def pair_forces(law, run, kin, fa, pr, b_active):
             ed += e1
             ef += e2
             er += e3
-    run.eacc[P.E_DASHPOT] += ed
-    run.eacc[P.E_FRICTION] += ef
-    run.eacc[P.E_ROLLING] += er
+    book_contact_work(run.eacc, ed, ef, er)
 
 
 @njit(cache=True, error_model="numpy")

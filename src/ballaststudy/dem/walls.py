@@ -11,7 +11,7 @@ import numba
 from numba import njit
 
 from . import params as P
-from .contacts import contact_opened
+from .contacts import book_contact_work, contact_opened
 from .jit import LOOP, NO_NRT
 from .neighbours import seg_closest
 from .submodels import WIDTH, cached_row, coefficient_row, contact_energy, contact_force, lf
@@ -123,9 +123,7 @@ def wall_forces(law, run, kin, fa, walls, wp):
         ef += e2
         er += e3
         ew += e4
-    run.eacc[P.E_DASHPOT] += ed
-    run.eacc[P.E_FRICTION] += ef
-    run.eacc[P.E_ROLLING] += er
+    book_contact_work(run.eacc, ed, ef, er)
     run.eacc[P.E_WALLS] += ew
 
 
