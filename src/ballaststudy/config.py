@@ -147,9 +147,15 @@ def select_databases(cfg, databases, file="config"):
     return list(wanted)
 
 
+def job_seed(study_seed, key):
+    """The one seed formula: a job's seed from the study seed and the job's key (e.g.
+    "G_1-1", "G_1-1/bpm", "G_1-1/case3") via CRC-32 (Python's hash() is salted per process
+    and so not reproducible)."""
+    return (int(study_seed) * 1_000_003 + zlib.crc32(key.encode())) % 2**63
+
+
 def database_seed(study_seed, name, definition):
-    """One deterministic seed per database: explicit, or from (study seed, name) via CRC-32
-    (Python's hash() is salted per process and so not reproducible)."""
+    """One deterministic seed per database: explicit, or job_seed(study seed, name)."""
     if definition.get("seed") is not None:
         return int(definition["seed"])
-    return (int(study_seed) * 1_000_003 + zlib.crc32(name.encode())) % 2**63
+    return job_seed(study_seed, name)

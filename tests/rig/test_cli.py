@@ -38,6 +38,9 @@ def test_case_cli_with_resume(small_library, small_config, tmp_path, capsys):
     with xr.open_dataset(out) as ds:
         assert ds.sizes["cycle"] == 2
         assert ds["settlement"].attrs["units"] == "m"
+        assert ds.attrs["Conventions"] == "CF-1.8"
+    with xr.open_dataset(asm) as ds:
+        assert ds.attrs["Conventions"] == "CF-1.8"
     for name in ("case.png", "behaviours.png"):
         assert out.with_name(name).stat().st_size > 1000
     assert sorted(p.name for p in out.with_name("vtk").iterdir())[:1] == ["balls_cycle00000.vtp"]

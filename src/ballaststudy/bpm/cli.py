@@ -5,13 +5,13 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..config import ConfigError, database_seed, load_config
+from ..config import ConfigError, job_seed, load_config
 
 
 def bpm_seed(study_seed, database):
     """The library's seed: from the study seed and the database name (CRC-32, like every
     job seed), with a stage suffix so that it differs from the forms job's seed."""
-    return database_seed(study_seed, f"{database}/bpm", {})
+    return job_seed(study_seed, f"{database}/bpm")
 
 
 def _bpm_build(args):

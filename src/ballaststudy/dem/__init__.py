@@ -1,18 +1,20 @@
-"""Numba 2D DEM engine in PFC2D conventions (see docs/physics-spec.md).
+"""Numba 2D DEM engine in PFC2D conventions (verification cases: tests/dem, one per case of
+the project physics specification).
 
-Public API: ``Simulation`` (build, run, measure, checkpoint), parameter dataclasses
-``ContactMaterial`` / ``FlatJointMaterial``, ``SimulationError``, ``inertial_number``,
-``BREAK_MODES``.
+Public API: ``Simulation`` (build, run, measure, checkpoint), ``ContactLaw`` (sub-model
+composition), parameter dataclasses ``ContactMaterial`` / ``FlatJointMaterial``,
+``SimulationError``, ``inertial_number``, ``BREAK_MODES``.
 """
 from . import _cache
 
 _cache.refresh()    # before any kernel is loaded from the numba cache
 
+from .law import ContactLaw  # noqa: E402
 from .materials import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial  # noqa: E402
 from .output import inertial_number  # noqa: E402
 from .simulation import Simulation, SimulationError  # noqa: E402
 
 BREAK_MODES = ("tension", "shear")
 
-__all__ = ["Simulation", "SimulationError", "ContactMaterial", "FlatJointMaterial",
+__all__ = ["Simulation", "SimulationError", "ContactLaw", "ContactMaterial", "FlatJointMaterial",
            "inertial_number", "BREAK_MODES", "DENSITY_HARD", "DENSITY_SOFT"]

@@ -2,7 +2,6 @@
 bottom segments and the sides, which clump is the pressing plate and which the loading
 ball, which stones came from which library entries). Saved as one netCDF file that holds
 the inspectable state and the engine checkpoint bytes (bitwise restore)."""
-import io
 import json
 import os
 import tempfile
@@ -149,7 +148,9 @@ class BoxRig:
              "wall_segment": (("wall", "xy2"), sim.walls.seg, {"units": "m"}),
              "engine_checkpoint": ("nbytes", np.frombuffer(self.engine_bytes(), np.uint8),
                                    {"long_name": "ballaststudy.dem checkpoint (npz bytes)"})},
-            attrs={"rig_layout_json": json.dumps(vars(lay)),
+            attrs={"Conventions": "CF-1.8",
+                   "title": "box-test case: assembled specimen (thesis 4.2.2)",
+                   "rig_layout_json": json.dumps(vars(lay)),
                    "rig_params_json": json.dumps(self.params.to_dict()),
                    "database": lay.database, "seed": lay.seed, "step": sim.step,
                    **(attrs or {})})
@@ -168,9 +169,3 @@ class BoxRig:
             lay = RigLayout(**json.loads(ds.attrs["rig_layout_json"]))
             prm = RigParams(**json.loads(ds.attrs["rig_params_json"]))
         return cls(cls.sim_from_bytes(data, path), lay, prm)
-
-
-def npz_bytes(**arrays):
-    buf = io.BytesIO()
-    np.savez(buf, **arrays)
-    return buf.getvalue()

@@ -2,8 +2,9 @@
 gives them (4.1, 4.2.2, 4.2.3) and defended choices where it does not (see
 config/thesis.yaml for the reason of each; the defaults here are its values, checked by
 tests/workflow/test_param_defaults.py). Units are SI unless the key names one."""
-import zlib
 from dataclasses import asdict, dataclass, field, fields
+
+from ..config import job_seed
 
 
 @dataclass
@@ -82,6 +83,5 @@ class RigParams:
 
 
 def case_seed(study_seed, database, case):
-    """One seed per (database, case), reproducible across processes (CRC-32, not hash())."""
-    key = f"{database}/case{int(case)}".encode()
-    return (int(study_seed) * 1_000_003 + zlib.crc32(key)) % 2**63
+    """One seed per (database, case): config.job_seed of "<database>/case<k>"."""
+    return job_seed(study_seed, f"{database}/case{int(case)}")

@@ -14,7 +14,6 @@ import xarray as xr
 from ..atomic import atomic_path
 from .loading import CYCLE_FIELDS
 
-MODE_CODES = {1: "tension", 2: "shear"}
 
 
 def breakage_records(run):
@@ -139,6 +138,7 @@ def to_dataset(run, attrs=None):
                                              "flag_meanings": "outside bottom left right"})
     n_bonds = int(s["n_bonds0"]) * int(rig.sim.bonds.state.shape[1])
     ds = xr.Dataset(data, coords=coords, attrs={
+        "Conventions": "CF-1.8",
         "title": "box-test case: per-cycle records and behaviours (thesis 4.2.3, 4.5.1)",
         "database": lay.database, "seed": lay.seed, "cycles_requested": run.cycles,
         "y_reference": s["y_ref"], "static_end_step": s["static_end_step"],
