@@ -100,3 +100,19 @@ def test_case10_cantilever_chain():
     sim.run(200_000, callback=lambda s: np.abs(s.balls.vel).max() < 1e-9 * ref / s.dt, every=2000)
     delta = -sim.balls.pos[n, 1]
     assert abs(delta - ref) <= 0.02 * ref, f"tip deflection measured {delta:.5e} m analytical {ref:.5e} m"
+
+
+def test_fragments_follow_intact_bonds_and_deleted_balls():
+    """One meaning of an intact bond (active, >= 1 intact element) and of a fragment."""
+    sim = Simulation(gravity=(0.0, 0.0), domain=(-1, -1, 1, 1))
+    sim.add_balls([0.0, 0.02, 0.1, 0.12], [0.0] * 4, 0.01, 2650.0, stone_id=[0, 0, 1, 1])
+    assert sim.install_flat_joints(FlatJointMaterial()) == 2
+    assert sim.intact_bonds().tolist() == [True, True]
+    assert sim.fragments().tolist() == [0, 0, 1, 1]
+    sim.bonds.state[0, :] = 0                     # every element of the first bond broken
+    assert sim.intact_bonds().tolist() == [False, True]
+    assert sim.fragments().tolist() == [0, 1, 2, 2]
+    sim.delete_balls([3])                         # its bond goes with it
+    assert sim.intact_bonds().tolist() == [False, False]
+    assert sim.fragments().tolist() == [0, 1, 2, -1]
+    assert sim.fragments(2).tolist() == [0, 1]

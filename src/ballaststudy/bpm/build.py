@@ -25,8 +25,6 @@ deleted before the bonded relaxation; the counts are recorded per stone.
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..dem import ContactMaterial, Simulation
 from . import packing
@@ -175,7 +173,6 @@ def _bonded(batch, params, pos, vel, r, k_of, mat, off):
     sim.add_balls(pos[:, 0], pos[:, 1], r, density=np.asarray(DENSITIES)[mat], stone_id=k_of,
                   material_id=mat)
     sim.install_flat_joints(flat_joint_materials())
-    bl = sim.bond_list()
     n = len(r)
     # escaped: centre outside its own polygon (cannot happen unless a ball tunnelled a wall)
     outside = np.zeros(n, bool)
@@ -184,9 +181,8 @@ def _bonded(batch, params, pos, vel, r, k_of, mat, off):
         m = len(s.r)
         outside[start:start + m] = packing.inside_distance(pos[start:start + m] - o, s.poly) < 0
         start += m
-    # keep per stone the largest bonded cluster (ties: the one with the lowest ball id)
-    g = coo_matrix((np.ones(len(bl["i"])), (bl["i"], bl["j"])), shape=(n, n))
-    _, comp = connected_components(g, directed=False)
+    # keep per stone its largest fragment (ties: the one with the lowest ball id)
+    comp = sim.fragments()
     keep = np.zeros(n, bool)
     for k in range(len(batch)):
         idx = np.nonzero((k_of == k) & ~outside)[0]
@@ -200,6 +196,8 @@ def _bonded(batch, params, pos, vel, r, k_of, mat, off):
     sim.run(params.bonded_cycles)
     b = sim.balls
     bl = sim.bond_list()
+    # the library keeps only bonds with every element intact: the rig installs them anew,
+    # so a partly broken one would come back healed (with N_r = 1 the same as intact_bonds)
     intact = (bl["active"] == 1) & bl["state"].all(axis=1)
     bi, bj = bl["i"][intact], bl["j"][intact]
     brk = sim.breakages()

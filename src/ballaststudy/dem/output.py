@@ -70,6 +70,24 @@ def contact_state(sim):
     return out
 
 
+def intact_bonds(sim):
+    """(n_bonds,) bool: the bond's interface exists and has at least one intact element —
+    the one meaning of an intact bond (fragments, breakage, outputs)."""
+    bd = sim.bonds
+    return (bd.active == 1) & bd.state.any(axis=1)
+
+
+def fragments(sim, balls=None):
+    """Fragment label per ball of ``balls`` (default: all; dead balls -1), numbered by lowest
+    ball id: connected components over the intact bonds among those balls."""
+    from .fragments import fragments as label
+    b, bd = sim.balls, sim.bonds
+    n = len(b) if balls is None else int(balls)
+    keep = intact_bonds(sim) & (bd.i < n) & (bd.j < n)
+    return label(n, bd.i[keep], bd.j[keep], np.ones(int(keep.sum()), bool),
+                 ballast=b.alive[:n] == 1)[1]
+
+
 def bond_list(sim):
     """Flat joints: i, j, active, per-element state (1 bonded) / normal force (tension +) /
     shear force, bending moment on j, accumulated relative rotation."""

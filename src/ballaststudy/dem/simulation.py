@@ -526,6 +526,14 @@ class Simulation:
         """Persistent per-contact state of the law's sub-models (slip_work, ...) [J]."""
         return output.contact_state(self)
 
+    def intact_bonds(self):
+        """(n_bonds,) bool: interface present with >= 1 intact element."""
+        return output.intact_bonds(self)
+
+    def fragments(self, n_balls=None):
+        """Fragment label of balls 0..n_balls-1 (default all; -1: dead), by lowest ball id."""
+        return output.fragments(self, n_balls)
+
     def bond_list(self):
         """Flat joints with per-element state and forces."""
         return output.bond_list(self)

@@ -80,19 +80,8 @@ class BoxRig:
         return ids[b.alive[ids] == 1]
 
     def fragments(self):
-        """Fragment id per ball (-1 for dead balls and rig bodies): connected components
-        of balls linked by bonds with >= 1 intact element."""
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import connected_components
-        n = self.layout.n_stone_balls
-        bd = self.sim.bonds
-        keep = (bd.active == 1) & (bd.state.max(axis=1) == 1) & (bd.i < n) & (bd.j < n)
-        g = coo_matrix((np.ones(keep.sum()), (bd.i[keep], bd.j[keep])), shape=(n, n))
-        _, lab = connected_components(g, directed=False)
-        alive = self.sim.balls.alive[:n] == 1
-        out = np.full(n, -1, np.int32)
-        _, out[alive] = np.unique(lab[alive], return_inverse=True)
-        return out
+        """Fragment id per stone ball (-1 for dead balls): Simulation.fragments."""
+        return self.sim.fragments(self.layout.n_stone_balls).astype(np.int32)
 
     def weight(self):
         """Total weight of live balls and clumps (plate, loading ball) [N] (positive)."""
@@ -143,7 +132,7 @@ class BoxRig:
              "alive": ("ball", b.alive, {"long_name": "1 = ball exists"}),
              "fragment": ("ball", frag, {"long_name": "fragment id (-1: none)"}),
              "bond_i": ("bond", bd.i), "bond_j": ("bond", bd.j),
-             "bond_intact": ("bond", (bd.active == 1) & (bd.state.max(axis=1) == 1),
+             "bond_intact": ("bond", sim.intact_bonds(),
                              {"long_name": "bond has an intact element"}),
              "wall_segment": (("wall", "xy2"), sim.walls.seg, {"units": "m"}),
              "engine_checkpoint": ("nbytes", np.frombuffer(self.engine_bytes(), np.uint8),

@@ -292,7 +292,7 @@ class LoadingRun:
         return dict(
             pos=b.pos.copy(), rad=b.rad.copy(), ballast=ballast,
             bond_i=bd.i, bond_j=bd.j,
-            bond_intact=(bd.active == 1) & (bd.state.max(axis=1) == 1),
+            bond_intact=sim.intact_bonds(),
             contact_i=i, contact_j=j, contact_fn=fn, ball_touches_container=touch,
             geometry=dict(container_x_min=float(sim.walls.seg[lay.left_low, 0]),
                           container_x_max=float(sim.walls.seg[lay.right_low, 0]),

@@ -65,7 +65,7 @@ def write_vtk(rig, folder, tag):
                                ("material", b.mat[live], "Int32"),
                                ("body", body[live], "Int32")])
     bd = sim.bonds
-    intact = bd.state.max(axis=1) == 1
+    intact = sim.intact_bonds()
     allint = bd.state.min(axis=1) == 1
     state = np.where(allint, 0, 3)
     lg = sim.log
