@@ -55,9 +55,10 @@ def metrics_dataset(rows, attrs=None):
 def write_metrics(path, rows_or_dataset, attrs=None):
     """Write metrics.nc atomically (temp + rename); returns the path."""
     ds = rows_or_dataset if isinstance(rows_or_dataset, xr.Dataset) else metrics_dataset(rows_or_dataset, attrs)
-    for name, v in ds.variables.items():
-        if "units" not in v.attrs or "long_name" not in v.attrs:
-            raise ValueError(f"variable {name!r} lacks units or long_name")
+    bad = [name for name, v in ds.variables.items()
+           if "units" not in v.attrs or "long_name" not in v.attrs]
+    if bad:
+        raise ValueError(f"variables lacking units or long_name: {bad}")
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine="netcdf4")
     return path

@@ -11,7 +11,6 @@ import json
 import numpy as np
 import xarray as xr
 
-from ..atomic import atomic_path
 from .loading import CYCLE_FIELDS
 
 
@@ -82,7 +81,8 @@ def to_dataset(run, attrs=None):
     coords = {"cycle": ("cycle", np.arange(n), {"long_name": "loading cycle"}),
               "segment_x": ("segment", 0.5 * (seg[:, 0] + seg[:, 2]),
                             {"units": "m", "long_name": "bottom segment centre x"}),
-              "side": ("side", ["left", "right"]), "component": ("component", ["x", "y"])}
+              "side": ("side", ["left", "right"], {"units": "1", "long_name": "container side wall"}),
+              "component": ("component", ["x", "y"], {"units": "1", "long_name": "force component"})}
     # time series of the loading ball
     sm = run.samples
     data["sample_step"] = ("sample", np.asarray(sm["step"], np.int64), {"units": "1",
@@ -107,21 +107,24 @@ def to_dataset(run, attrs=None):
     nn = lay.n_stone_balls
     b = rig.sim.balls
     data["ball_radius"] = ("ball", b.rad[:nn], {"units": "m", "long_name": "ball radius"})
-    data["ball_stone"] = ("ball", b.stone[:nn], {"long_name": "stone id"})
+    data["ball_stone"] = ("ball", b.stone[:nn], {"units": "1", "long_name": "stone id"})
     data["ball_material"] = ("ball", b.mat[:nn].astype(np.int8),
-                             {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "hard soft"})
-    data["ball_alive"] = ("ball", b.alive[:nn], {"long_name": "1 = ball exists at the end"})
+                             {"units": "1", "long_name": "ball material",
+                              "flag_values": np.array([0, 1], np.int8), "flag_meanings": "hard soft"})
+    data["ball_alive"] = ("ball", b.alive[:nn], {"units": "1",
+                                                 "long_name": "1 = ball exists at the end"})
     ns = len(run.snap_cycles)
-    data["snapshot_cycle"] = ("snapshot", np.asarray(run.snap_cycles, np.int64))
+    data["snapshot_cycle"] = ("snapshot", np.asarray(run.snap_cycles, np.int64),
+                              {"units": "1", "long_name": "cycle of the snapshot"})
     data["snapshot_x"] = (("snapshot", "ball"), np.asarray(run.snap_pos, np.float32).reshape(ns, nn, 2)[..., 0],
                           {"units": "m", "long_name": "ball x at peak load"})
     data["snapshot_y"] = (("snapshot", "ball"), np.asarray(run.snap_pos, np.float32).reshape(ns, nn, 2)[..., 1],
                           {"units": "m", "long_name": "ball y at peak load"})
     data["snapshot_fragment"] = (("snapshot", "ball"), np.asarray(run.snap_frag, np.int32).reshape(ns, nn),
-                                 {"long_name": "fragment id (-1: ball deleted)"})
+                                 {"units": "1", "long_name": "fragment id (-1: ball deleted)"})
     cnt = [len(c["i"]) for c in run.snap_contacts]
     data["snapshot_contact_count"] = ("snapshot", np.asarray(cnt, np.int64),
-                                      {"sample_dimension": "contact",
+                                      {"sample_dimension": "contact", "units": "1",
                                        "long_name": "contacts carrying force at peak load"})
     for k, units, ln in (("i", "1", "ball i"), ("j", "1", "ball j (< 0: wall segment -1-j)"),
                          ("fx", "N", "force on j, x"), ("fy", "N", "force on j, y"),
@@ -134,7 +137,8 @@ def to_dataset(run, attrs=None):
     wall_kind[lay.bottom] = 1
     wall_kind[lay.left] = 2
     wall_kind[lay.right] = 3
-    data["wall_kind"] = ("wall", wall_kind, {"flag_values": np.array([0, 1, 2, 3], np.int8),
+    data["wall_kind"] = ("wall", wall_kind, {"units": "1", "long_name": "container wall segment",
+                                             "flag_values": np.array([0, 1, 2, 3], np.int8),
                                              "flag_meanings": "outside bottom left right"})
     n_bonds = int(s["n_bonds0"]) * int(rig.sim.bonds.state.shape[1])
     ds = xr.Dataset(data, coords=coords, attrs={
@@ -155,7 +159,9 @@ def to_dataset(run, attrs=None):
 
 
 def write_metrics(run, path, attrs=None):
+    """metrics.nc of a run, through the one metrics writer (every variable with units and
+    long_name, atomic)."""
+    from ..metrics.output import write_metrics as write
     ds = to_dataset(run, attrs)
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp)
+    write(path, ds)
     return ds

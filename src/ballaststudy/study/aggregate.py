@@ -19,24 +19,15 @@ import xarray as xr
 from ..atomic import atomic_path
 from ..config import ConfigError
 from ..forms.validate import validation_row
+from ..metrics.output import VARIABLES
 from ..provenance import Recorder
 from ..standards import GRADING_SIEVES_MM
 
 # name -> (canonical units, long name). Same names as in the rig's metrics.nc.
-BEHAVIOURS = {
-    "settlement": ("m", "ballast settlement: loading-plate displacement at 30 kN relative to cycle 0, "
-                        "positive downward (thesis 4.5.1)"),
-    "breakage_rate_tension": ("1", "breakage rate in tension BR_T: broken flat-joint bonds in tension "
-                                   "over all flat-joint bonds (eq. 4.6)"),
-    "breakage_rate_shear": ("1", "breakage rate in shear BR_S (eq. 4.7)"),
-    "breakage_rate": ("1", "breakage rate BR = BR_T + BR_S (eq. 4.8)"),
-    "fpa_left": ("degree", "force propagation angle, left of the plate middle (eq. 4.9)"),
-    "fpa_right": ("degree", "force propagation angle, right of the plate middle (eq. 4.9)"),
-    "fpa": ("degree", "force propagation angle, mean of left and right (eq. 4.9)"),
-    "void_ratio": ("1", "void ratio of the ballast aggregate (thesis 4.5.1)"),
-    "ghost_particles": ("1", "number of ghost particles (stones carrying no load)"),
-    "mean_coordination": ("1", "mean coordination number (contacts per stone)"),
-}
+# the behaviours of study.nc: units and long names are metrics.nc's (one table per variable)
+BEHAVIOURS = {name: VARIABLES[name][:2] for name in (
+    "settlement", "breakage_rate_tension", "breakage_rate_shear", "breakage_rate", "fpa_left",
+    "fpa_right", "fpa", "void_ratio", "ghost_particles", "mean_coordination")}
 
 # accepted input units -> factor to the canonical unit
 _UNIT_FACTORS = {
