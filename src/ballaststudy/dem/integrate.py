@@ -1,6 +1,6 @@
 """Velocity Verlet (LAMMPS order: half kick, drift | forces | half kick), PFC local
 damping, guards, critical timestep and density scaling. The per-ball halves are inline
-helpers shared by the chunk's first half step and the fused pass of step.py.
+helpers shared by the two halves of the step and the guards.
 
 Velocity-dependent forces (dashpots, local damping) see the half-step velocity, as in
 both LAMMPS's velocity Verlet and PFC's central-difference cycle.
@@ -103,7 +103,7 @@ def first_half(prm, kin, fa, balls, clumps):
     """One pass per free ball over its packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m,
     material) and force row ``fa`` = (fx, fy, mz): half kick, drift, the displacement since
     the last neighbour build, force reset to weight + external load. Then half kick + drift
-    of clumps. (Inside a chunk, step.forces_and_kicks does this ball by ball.)
+    of clumps.
 
     Verlet-list validity (exact, by the triangle inequality): a pair not listed had a
     gap > skin, and |dx_i - dx_j| <= |dx_i - c| + |dx_j - c| for ANY common vector c;

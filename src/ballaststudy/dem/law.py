@@ -125,7 +125,8 @@ class ContactLaw:
         key = 0
         for k, v in enumerate(fields):
             if not 0 <= v < 16:
-                raise ValueError(f"contact law {self.names}: layout field {k} = {v} does not fit 4 bits")
+                raise ValueError(f"contact law {self.names}: layout field {k} = {v} "
+                                 "does not fit in 4 bits")
             key |= v << (4 * k)
         return key
 

@@ -77,12 +77,12 @@ def intact_bonds(sim):
     return (bd.active == 1) & bd.state.any(axis=1)
 
 
-def fragments(sim, balls=None):
-    """Fragment label per ball of ``balls`` (default: all; dead balls -1), numbered by lowest
+def fragments(sim, n_balls=None):
+    """Fragment label of balls 0..n_balls-1 (default: all; dead balls -1), numbered by lowest
     ball id: connected components over the intact bonds among those balls."""
     from .fragments import fragments as label
     b, bd = sim.balls, sim.bonds
-    n = len(b) if balls is None else int(balls)
+    n = len(b) if n_balls is None else int(n_balls)
     keep = intact_bonds(sim) & (bd.i < n) & (bd.j < n)
     return label(n, bd.i[keep], bd.j[keep], np.ones(int(keep.sum()), bool),
                  ballast=b.alive[:n] == 1)[1]

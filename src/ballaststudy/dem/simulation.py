@@ -434,8 +434,9 @@ class Simulation:
 
     def critical_dt(self):
         """min sqrt(m/k_tr) and sqrt(I/k_rot) over the current Verlet lists and bonds."""
-        return timestep(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
-                           self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
+        return timestep(self._layout)(self._run_state(), self.balls.kernel(),
+                                      self.pairs.kernel(), self.wpairs.kernel(),
+                                      self.walls.mat, self.bonds.kernel())
 
     def run(self, n_steps, callback=None, every=None):
         """Advance ``n_steps`` steps. With ``callback``, call ``callback(sim)`` every
@@ -455,10 +456,9 @@ class Simulation:
 
     def _run_kernel(self, k):
         b = self.balls
-        status, _, pr, wp = stepper(self._layout)(k, self._run_state(), b.kernel(), self.walls.kernel(),
-                                      self.clumps.kernel(), self.pairs.kernel(),
-                                      self.wpairs.kernel(), self.bonds.kernel(),
-                                      self.log.kernel())
+        status, _, pr, wp = stepper(self._layout)(
+            k, self._run_state(), b.kernel(), self.walls.kernel(), self.clumps.kernel(),
+            self.pairs.kernel(), self.wpairs.kernel(), self.bonds.kernel(), self.log.kernel())
         self.pairs.take(pr)
         self.wpairs.take(wp)
         if status != P.OK:

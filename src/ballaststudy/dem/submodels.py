@@ -9,7 +9,7 @@ in the Verlet list, carried over rebuilds and checkpointed). ``law`` (an int bui
 ``law.ContactLaw.layout``) holds each kind's code and the first column of its blocks.
 
 Both contact loops (ball-ball, ball-wall) call ``contact_force`` with the contact frame and
-the raw kinematics; a wall plays body i with zero radius and infinite mass (minv = iinv = 0).
+the raw kinematics; a wall plays body i with zero radius and infinite mass (minv = 0).
 Convention: n points from body i to body j, t = z x n; forces are those ON j; a moment is
 about the body's own centre.
 """
@@ -112,7 +112,7 @@ def tangential_stiffness(law, c, kn):
 
 
 @njit(**JIT)
-def tangential_force(law, c, fnl, fn, vn, vt, nx, ny, kn, ks, mc, dt, hist, p):
+def tangential_force(law, c, fnl, fn, vt, nx, ny, ks, mc, dt, hist, p):
     """Shear force along t; updates the history. Returns (F_t, dashpot work, slip work).
 
     pfc_incremental (kappa, mu, beta_s; history: F_s): F_s <- F_s - k_s v_t dt, Coulomb
@@ -203,8 +203,9 @@ def rolling_stiffness(law, c, ks, ri, rj):
 
 
 @njit(**JIT)
-def rolling_moment(law, c, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
-    """Rolling-resistance moment on j (on i: the opposite) and the work it dissipated.
+def rolling_moment(law, c, fn, kr, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
+    """Rolling-resistance moment on j (on i: the opposite) and the work it dissipated
+    (k_r from rolling_stiffness).
 
     epsd — elastic-plastic spring-dashpot, "type C" of Ai et al. (2011), Powder Technol.
     206 (mu_r, kr_ratio, eta_r; history: the spring moment M_r; state: rolling_work [J]):
@@ -218,7 +219,6 @@ def rolling_moment(law, c, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
     if lf(law, ROLLING) == ROLLING_EPSD:
         o = lf(law, C_ROLLING)
         h = lf(law, H_ROLLING)
-        kr = rolling_stiffness(law, c, ks, ri, rj)
         m = hist[p, h] - kr * wrel * dt
         lim = c[o] * rolling_radius(ri, rj) * max(fn, 0.0)
         if abs(m) > lim:
@@ -236,9 +236,8 @@ def rolling_moment(law, c, fn, ks, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
 
 
 @njit(**JIT)
-def rolling_energy(law, c, ks, ri, rj, hist, p):
-    """Elastic energy of the rolling spring [J]."""
-    kr = rolling_stiffness(law, c, ks, ri, rj)
+def rolling_energy(law, kr, hist, p):
+    """Elastic energy of the rolling spring of stiffness k_r [J]."""
     return 0.5 * hist[p, lf(law, H_ROLLING)] ** 2 / kr if kr > 0.0 else 0.0
 
 
@@ -255,8 +254,8 @@ def contact_stiffness(law, c, ri, rj, thick):
 def contact_force(law, c, nx, ny, delta, dvx, dvy, wi, wj, ri, rj, minv_i, minv_j,
                   thick, dt, hist, p):
     """Force of one touching contact (delta > 0). dv = v_j - v_i of the centres (a wall:
-    its velocity at the contact point), w = spins, ri = 0 and minv_i = 0 for a wall. Updates the
-    history and the persistent state (work dissipated by slip at this contact [J]).
+    its velocity at the contact point), w = spins, ri = 0 and minv_i = 0 for a wall.
+    Updates the history and the persistent state (slip and rolling work at this contact).
     Returns (fx, fy on j, moment on i, moment on j, F_n, F_t, dashpot work, slip work,
     rolling work) of this step."""
     tx = -ny
@@ -270,14 +269,11 @@ def contact_force(law, c, nx, ny, delta, dvx, dvy, wi, wj, ri, rj, minv_i, minv_
     vn = vrx * nx + vry * ny
     vt = vrx * tx + vry * ty
     mc = 1.0 / (minv_i + minv_j)
-    kn = normal_stiffness(law, c, ri, rj, thick)
-    ks = tangential_stiffness(law, c, kn)
+    kn, ks, kr = contact_stiffness(law, c, ri, rj, thick)
     fnl = kn * delta
     fn = damped_normal_force(law, c, fnl, vn, kn, mc)
-    ft, e_dash, e_slip = tangential_force(law, c, fnl, fn, vn, vt, nx, ny, kn, ks,
-                                          mc, dt, hist, p)
-    mr, e_roll = rolling_moment(law, c, fnl, ks, wj - wi, minv_i, minv_j, ri, rj,
-                                dt, hist, p)
+    ft, e_dash, e_slip = tangential_force(law, c, fnl, fn, vt, nx, ny, ks, mc, dt, hist, p)
+    mr, e_roll = rolling_moment(law, c, fnl, kr, wj - wi, minv_i, minv_j, ri, rj, dt, hist, p)
     e_dash -= (fn - fnl) * vn * dt
     hist[p, lf(law, WIDTH) + lf(law, S_TANGENTIAL)] += e_slip   # unconditional: a branch was slower
     return (fn * nx + ft * tx, fn * ny + ft * ty, -ai * ft - mr, -aj * ft + mr, fn, ft,
@@ -289,4 +285,4 @@ def contact_energy(law, c, delta, ri, rj, thick, hist, p):
     """Elastic energy stored in a touching contact: normal, shear and rolling springs [J]."""
     kn, ks, kr = contact_stiffness(law, c, ri, rj, thick)
     return (0.5 * kn * delta * delta + tangential_energy(law, hist, p, ks)
-            + rolling_energy(law, c, ks, ri, rj, hist, p))
+            + rolling_energy(law, kr, hist, p))
