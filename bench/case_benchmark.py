@@ -66,7 +66,7 @@ def main(argv=None):
     t1 = time.perf_counter()
     s1 = rig.sim.step
     try:
-        while run.s["phase"] in ("static", "unload"):
+        while run.s.phase in ("static", "unload"):
             run.advance()
     except RuntimeError as err:
         print(f"static loading failed after {time.perf_counter() - t1:.1f} s, "

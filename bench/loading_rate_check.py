@@ -65,12 +65,12 @@ def load_one(assembled, config, overrides, cycles):
     rig = BoxRig.load(assembled)
     rig.params = params_from(config, overrides)
     run = LoadingRun(rig, cycles=cycles)
-    while run.s["phase"] in ("static", "unload"):
+    while run.s.phase in ("static", "unload"):
         run.advance()
     t, s0 = time.perf_counter(), rig.sim.step
     run.run()
     secs = time.perf_counter() - t
-    last = run.s["rows"][-1]
+    last = run.s.rows[-1]
     broken = run.cyc["elements_broken_tension"][-1] + run.cyc["elements_broken_shear"][-1]
     fmax = max(run.cyc["force_max"][1:] or run.cyc["force_max"])
     return dict(settlement=last["settlement"], displacement_at_peak=last["displacement_at_peak"],

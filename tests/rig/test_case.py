@@ -42,7 +42,7 @@ def test_static_force_balance(assembled, small_params):
     a little: local damping carries the rest)."""
     rig = BoxRig.load(assembled[0])
     run = LoadingRun(rig, cycles=1)
-    while run.s["phase"] == "static":
+    while run.s.phase == "static":
         run.advance()
     rig.sim.set_clump_velocity(rig.layout.loading, vel=(0.0, 0.0), held=True)
     rig.sim.run(200)
@@ -69,9 +69,9 @@ def test_static_loads_and_momentum_balance(assembled, small_params):
     while the packing still moves."""
     rig = BoxRig.load(assembled[0])
     run = LoadingRun(rig, cycles=1)
-    while run.s["phase"] == "static":
+    while run.s.phase == "static":
         run.advance()
-    means = run.s["static_mean"]
+    means = run.s.static_mean
     assert len(means) == 3
     for m, t in zip(means, small_params.static_loads_kN):
         assert abs(m - 1e3 * t) / (1e3 * t) < small_params.static_tolerance
@@ -134,8 +134,8 @@ def test_resume_is_identical(full_run, assembled, tmp_path):
     ck = tmp_path / "ck.npz"
     first = LoadingRun(BoxRig.load(assembled[0]), cycles=CYCLES, checkpoint=ck, checkpoint_every=1)
     first.run(stop_after=1)
-    for _ in range(30):              # progress after the checkpoint that the crash loses
-        first.advance()
+    first.advance(max_steps=200)     # progress after the checkpoint that the crash loses
+    assert first.s.cycle == 1 and first.s.phase == "cyclic"
     resumed = LoadingRun.from_checkpoint(ck).run()
     a, b = to_dataset(full_run), to_dataset(resumed)
     for name in a.data_vars:
@@ -170,15 +170,17 @@ def test_density_scaling_option(assembled):
 def test_cyclic_speed_profile(assembled):
     """v_max until the force is within the braking fraction of the range from the bound
     approached, then linear down to v_min at the bound; direction = sign."""
-    run = LoadingRun(BoxRig.load(assembled[0]), cycles=1)
-    p = run.rig.params
+    from ballaststudy.rig.loading import PROFILE
+    rig = BoxRig.load(assembled[0])
+    p = rig.params
     p.cyclic_v_max_m_s, p.cyclic_v_min_m_s, p.cyclic_braking_fraction = 0.1, 0.01, 0.25
-    run.s["phase"], run.s["direction"] = "cyclic", -1          # loading towards 45 kN
+    c = LoadingRun(rig, cycles=1).control
+    c.set(PROFILE, direction=-1)                               # loading towards 45 kN
     band = 0.25 * 30e3
-    assert run._velocity(15e3) == pytest.approx(-0.1)
-    assert run._velocity(45e3 - band) == pytest.approx(-0.1)
-    assert run._velocity(45e3 - 0.5 * band) == pytest.approx(-0.055)
-    assert run._velocity(45e3) == pytest.approx(-0.01)
-    run.s["direction"] = 1                                     # unloading towards 15 kN
-    assert run._velocity(15e3 + 0.5 * band) == pytest.approx(0.055)
-    assert run._velocity(40e3) == pytest.approx(0.1)
+    assert c.velocity(PROFILE, 15e3) == pytest.approx(-0.1)
+    assert c.velocity(PROFILE, 45e3 - band) == pytest.approx(-0.1)
+    assert c.velocity(PROFILE, 45e3 - 0.5 * band) == pytest.approx(-0.055)
+    assert c.velocity(PROFILE, 45e3) == pytest.approx(-0.01)
+    c.set(PROFILE, direction=1)                                # unloading towards 15 kN
+    assert c.velocity(PROFILE, 15e3 + 0.5 * band) == pytest.approx(0.055)
+    assert c.velocity(PROFILE, 40e3) == pytest.approx(0.1)

@@ -20,8 +20,8 @@ from .walls import wall_elastic_energy
 @lru_cache(maxsize=None)
 def stepper(law):
     @njit
-    def bound(nsteps, run, balls, walls, clumps, pr, wp, bonds, log):
-        return run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log)
+    def bound(nsteps, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
+        return run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl)
     return bound
 
 

@@ -3,13 +3,15 @@
 One step: walls move, half kick + drift (balls, clumps) + force reset -> Verlet rebuild
 if two balls (or a ball and a wall) may have closed the skin since the last build (exact
 test, see integrate.first_half) -> ball-ball contacts -> flat joints -> ball-wall
-contacts -> local damping + half kick -> clumps -> guards. Returns early with a status
-code when a guard trips (after the full step). (A fused pass — each ball integrated right
+contacts -> local damping + half kick -> clumps -> guards -> controllers (control.py,
+every ``every`` steps). Returns early with a status code when a guard trips or a
+controller raises an event (after the full step). (A fused pass — each ball integrated right
 after its row of the half list — was tried and measured slower: +30 % per ball.)
 
 State comes as named containers (state.py): ``run`` (RunState: parameters, counters,
 energy accumulators, the contact law and its table), balls, walls, clumps, the two
-Verlet lists, bonds and the breakage log.
+Verlet lists, bonds, the breakage log and the controllers (``ctl``, control.py; ``every``
+= 0: none).
 """
 import numba
 import numpy as np
@@ -19,6 +21,7 @@ from . import params as P
 from .bonds import bond_forces
 from .clumps import gather_clumps, place_pebbles
 from .contacts import pack_kinematics, pair_forces
+from .control import EVERY, PENDING, actuate, control_step
 from .integrate import (clumps_damp_kick, critical_dt, first_half, guards, pebbles_moved,
                         second_half)
 from .neighbours import grow_rows, rebuild
@@ -62,7 +65,7 @@ def rebuild_lists(run, balls, walls, pr, wp, bonds):
 
 
 @njit(cache=True, error_model="numpy")
-def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log):
+def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
     """Advance up to ``nsteps`` steps with the contact law ``law`` (packed, compiled as a
     constant: submodels.py). run.cnt = [step, neighbour builds, force rebuild flag];
     prm[P.TIME] is advanced. Lists that needed more room are reallocated here, so they are
@@ -83,6 +86,9 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log):
         fa[i, 1] = balls.force[i, 1]
         fa[i, 2] = balls.moment[i]
     has_clumps = clumps.pos.shape[0] > 0
+    controlled = ctl.cfg[EVERY] > 0
+    if controlled and ctl.cfg[PENDING] > 0:     # velocities an event left pending
+        actuate(clumps, walls, ctl)
     for k in range(nsteps):
         dt = prm[P.DT]
         dt_next = dt
@@ -118,6 +124,8 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log):
             place_pebbles(kin, balls, clumps)
         st = guards(prm, kin, balls.alive, run.err) if suspect or has_clumps else P.OK
         prm[P.DT] = dt_next
+        if st == P.OK and controlled and control_step(prm, cnt[0], clumps, walls, ctl):
+            st = P.CONTROL_EVENT
         if st != P.OK:
             _write_back(kin, fa, balls)
             return st, k + 1, pr, wp

@@ -42,6 +42,7 @@ NEED_WALL_CAPACITY = 2
 NAN_FOUND = 3
 RUNAWAY = 4
 LEFT_DOMAIN = 5
+CONTROL_EVENT = 6     # a controller (control.py) asks the caller to react
 STATUS_TEXT = {NAN_FOUND: "NaN/Inf in ball state", RUNAWAY: "runaway velocity",
                LEFT_DOMAIN: "ball left the domain"}
 

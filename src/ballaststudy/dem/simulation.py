@@ -17,6 +17,7 @@ from . import params as P
 from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
 from .clumps import mass_properties
+from .control import Control
 from .bound import stepper, timestep
 from .engine import rebuild_lists
 from .integrate import reset_forces
@@ -24,6 +25,8 @@ from .law import ContactLaw
 from .materials import ContactMaterial, FlatJointMaterial
 from .state import Balls, Bonds, BreakLog, Clumps, Pairs, RunState, WallPairs, Walls
 from .submodels import NCOEF, contact_stiffness
+
+_NO_CONTROL = Control.empty()
 
 
 class SimulationError(RuntimeError):
@@ -438,29 +441,37 @@ class Simulation:
                                       self.pairs.kernel(), self.wpairs.kernel(),
                                       self.walls.mat, self.bonds.kernel())
 
-    def run(self, n_steps, callback=None, every=None):
+    def run(self, n_steps, callback=None, every=None, control=None):
         """Advance ``n_steps`` steps. With ``callback``, call ``callback(sim)`` every
         ``every`` steps (default: once at the end); the callback may change velocities,
         parameters, delete balls... and may return True to stop early.
+        ``control``: a built ``control.Control`` run inside the loop; the run stops early
+        when one of its controllers raises an event (``control.event``).
         Raises SimulationError if a guard trips (step, ball id, value in the message)."""
         every = n_steps if every is None else max(1, int(every))
+        ctl = _NO_CONTROL if control is None else control.arrays
         done = 0
         while done < n_steps:
             k = min(every, n_steps - done)
             self._prepare()
-            self._run_kernel(k)
+            status = self._run_kernel(k, ctl)
+            if status == P.CONTROL_EVENT:
+                break
             done += k
             if callback is not None and callback(self):
                 break
         return self
 
-    def _run_kernel(self, k):
+    def _run_kernel(self, k, ctl=None):
         b = self.balls
         status, _, pr, wp = stepper(self._layout)(
             k, self._run_state(), b.kernel(), self.walls.kernel(), self.clumps.kernel(),
-            self.pairs.kernel(), self.wpairs.kernel(), self.bonds.kernel(), self.log.kernel())
+            self.pairs.kernel(), self.wpairs.kernel(), self.bonds.kernel(), self.log.kernel(),
+            _NO_CONTROL if ctl is None else ctl)
         self.pairs.take(pr)
         self.wpairs.take(wp)
+        if status == P.CONTROL_EVENT:
+            return status
         if status != P.OK:
             i, v = int(self.err[0]), float(self.err[1])
             raise SimulationError(
@@ -468,6 +479,7 @@ class Simulation:
                 f"ball {i} (stone {int(b.stone[i])}, clump {int(b.clump[i])}), value {v:.6g}; "
                 f"pos {b.pos[i].tolist()}, vel {b.vel[i].tolist()}, domain {self.domain}, "
                 f"vmax {self.prm[P.VMAX]:g}; all offending balls: {self._offenders()}")
+        return status
 
     def _offenders(self, limit=20):
         b, p = self.balls, self.prm

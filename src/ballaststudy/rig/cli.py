@@ -62,7 +62,7 @@ def _case_run(args):
         run = LoadingRun.from_checkpoint(ckpt, cycles=args.cycles,
                                          checkpoint_every=args.checkpoint_every)
         if not args.quiet:
-            print(f"resuming from {ckpt} (cycle {run.s['cycle']}, step {run.rig.sim.step})")
+            print(f"resuming from {ckpt} (cycle {run.s.cycle}, step {run.rig.sim.step})")
     else:
         if not Path(args.assembled).is_file():
             raise ConfigError(args.assembled, None, "file not found")
@@ -77,9 +77,9 @@ def _case_run(args):
     if vtk_dir is not None:
         from .vtk import vtk_hook
         run.hooks.append(vtk_hook(vtk_dir, params.vtk_cycles, args.cycles))
-    bar = tqdm(total=args.cycles, initial=run.s["cycle"], desc="cycles", unit="cycle",
+    bar = tqdm(total=args.cycles, initial=run.s.cycle, desc="cycles", unit="cycle",
                disable=args.quiet)
-    last = [run.s["cycle"], None]
+    last = [run.s.cycle, None]
 
     def progress(phase, cycle):
         if cycle != last[0]:
@@ -96,8 +96,8 @@ def _case_run(args):
         raise ConfigError(args.assembled, "rig", f"{err}{kept}") from None
     finally:
         bar.close()
-    if run.s["phase"] != "done":
-        print(f"stopped after cycle {run.s['cycle']} (checkpoint {ckpt})", file=sys.stderr)
+    if run.s.phase != "done":
+        print(f"stopped after cycle {run.s.cycle} (checkpoint {ckpt})", file=sys.stderr)
         return
     write_outputs(run, out, figures=not args.no_figures,
                   attrs={"assembled_file": str(args.assembled)})

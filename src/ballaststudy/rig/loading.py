@@ -1,9 +1,10 @@
 """Loading the assembled box (thesis 4.2.3): static pre-loading 10/20/30 kN, then cyclic
 loading between 15 and 45 kN, with a record of every cycle and checkpoints.
 
-The loading ball is a held clump whose vertical velocity the rig sets every
-``control_every`` steps (a "fix" between engine runs), from the force the plate exerts
-on it (``BoxRig.loading_force``):
+The loading ball is a held clump whose vertical velocity controllers inside the engine's
+stepping loop set every ``control_every`` steps (``dem.control``, like LAMMPS fixes), from
+the force the plate exerts on it; Python sees the run at the controllers' events only
+(a static window complete, the peak, the trough), at checkpoints and for progress:
 
 * static: servo v = -gain (F_target - F), |v| <= servo_velocity; every
   ``static_window_steps`` the mean of the sampled force over the window is compared with
@@ -19,12 +20,12 @@ on it (``BoxRig.loading_force``):
 directly, and so does this rig (a 30 kN load on a t = 1 m slice).
 """
 import json
-import os
-import tempfile
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from ..atomic import atomic_path
+from ..dem.control import PEAK, TROUGH, WINDOW, Control
 from .box import BoxRig
 
 KN = 1.0e3
@@ -51,8 +52,60 @@ CYCLE_FIELDS = {
 }
 
 
+@dataclass
+class LoadingState:
+    """Where the loading run stands (checkpointed as JSON): the phase, the static target,
+    the cycle being recorded and what the cycle records need from its start and peak."""
+    phase: str = "static"            # static -> unload -> cyclic -> done
+    target: int = 0                  # index of the static load being held
+    windows: int = 0                 # averaging windows spent on it
+    cycle: int = 0
+    cycle_start_step: int = 0
+    cycle_sample0: int = 0           # first sample of the cycle
+    peak_sample: int = -1            # sample of the upper reversal (-1: not yet)
+    peak: dict | None = None         # loading-ball and plate state at the peak
+    log0: int = 0                    # breakage log entries before loading began
+    n_bonds0: int = 0                # bonds intact when loading began
+    static_end_step: int = -1
+    y_ref: float = float("nan")      # loading-ball height at the end of static loading
+    static_mean: list = field(default_factory=list)    # window mean force per static load
+    static_walls: list = field(default_factory=list)   # (bottom, side-wall vertical) means
+    rows: list = field(default_factory=list)           # behaviours per cycle
+    metrics_cfg: dict = field(default_factory=dict)
+
+
+# control sensors (samples are rows: step, then these readings)
+FORCE, Y, BOTTOM, SIDE = range(4)
+
+
+def loading_control(rig):
+    """Sensors, actuator and the two controllers of the box loading (kit: dem.control):
+    the PI servo of the static loads, then the cyclic bound-to-bound profile."""
+    p, lay = rig.params, rig.layout
+    c = Control(every=p.control_every)
+    f = c.clump_reaction(lay.loading, axis=1)
+    c.clump_position(lay.loading, axis=1)
+    c.wall_force(lay.bottom, axis=1, scale=-1.0)             # downwards +
+    c.wall_force(list(lay.left) + list(lay.right), axis=1, scale=-1.0)
+    ball = c.held_clump(lay.loading, axis=1)
+    # approach at the top speed until the ball presses the plate (5 % of the first load):
+    # the windows count from that contact, so a plate still settling under its own
+    # weight does not use them up
+    c.servo(f, ball, target=p.static_loads_kN[0] * KN, gain=p.servo_gain_m_s_per_kN,
+            gain_unit=KN, v_max=p.servo_velocity_m_s, integral_steps=p.servo_integral_steps,
+            window_steps=p.static_window_steps, touch=0.05 * p.static_loads_kN[0] * KN)
+    c.cyclic(f, ball, lo=p.cyclic_min_kN * KN, hi=p.cyclic_max_kN * KN,
+             v_min=p.cyclic_v_min_m_s, v_max=p.cyclic_v_max_m_s,
+             brake=p.cyclic_braking_fraction, direction=1, active=False)
+    return c.build()
+
+
+SERVO, PROFILE = 0, 1       # the controllers' indices in loading_control
+
+
 class LoadingRun:
-    """The loading state machine of one case. ``advance()`` = one control step."""
+    """The loading of one case: the controllers run inside the engine's loop; this class
+    reacts to their events (window complete, peak, trough) and keeps the records."""
 
     def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
                  resumed=False):
@@ -64,14 +117,9 @@ class LoadingRun:
         self.cycles = int(cycles)
         self.checkpoint = checkpoint
         self.checkpoint_every = int(checkpoint_every or p.checkpoint_every)
-        self.s = dict(phase="static", touched=False, target=0, win_sum=0.0, win_n=0, win_steps=0,
-                      windows=0, direction=-1, cycle=0, f_prev=0.0, y_prev=0.0,
-                      cyc_start=0, fmax=-1e300, fmin=1e300, y30=float("nan"),
-                      peak=None, log0=rig.sim.n_breakages, step0=rig.sim.step,
-                      static_end_step=-1, y_ref=float("nan"), static_mean=[],
-                      static_walls=[], win_bottom=0.0, win_side=0.0, cyc_sample0=0,
-                      metrics_cfg=dict(metrics or {}), rows=[],
-                      n_bonds0=int((rig.sim.bonds.active == 1).sum()))
+        self.s = LoadingState(log0=rig.sim.n_breakages, metrics_cfg=dict(metrics or {}),
+                              n_bonds0=int((rig.sim.bonds.active == 1).sum()))
+        self.control = loading_control(rig)
         self.samples = {k: [] for k in ("step", "cycle", "force", "y")}
         self.cyc = {k: [] for k in CYCLE_FIELDS}
         self.bottom = []     # (cycle, segment) at peak
@@ -80,139 +128,104 @@ class LoadingRun:
         self.snap_contacts = []
         self.hooks = []      # callables(run, cycle) at the end of each cycle (VTK...)
         self._metrics_setup()
-        self._ckpt_due = False
+        self._checkpoint_due = False
         if p.loading_dt_factor > 1.0 and not resumed:
             rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
     def _metrics_setup(self):
         from ..metrics import MetricsParams
         from ..metrics.void_ratio import SolidCache
-        self.metrics_params = MetricsParams.from_config(self.s["metrics_cfg"])
+        self.metrics_params = MetricsParams.from_config(self.s.metrics_cfg)
         # stone solids reused between cycles; emptied at every checkpoint cycle so that a
         # resumed run computes what an uninterrupted one does
         self.solid_cache = SolidCache(self.metrics_params.solid_reuse_tolerance)
 
-    # --------------------------------------------------------------- control law
-    def _velocity(self, f):
-        p, s = self.rig.params, self.s
-        if s["phase"] == "static":
-            # PI servo: the integral removes the offset a proportional servo keeps while
-            # the aggregate creeps (clamped: no wind-up beyond the speed limit)
-            target = p.static_loads_kN[s["target"]] * KN
-            e = p.servo_gain_m_s_per_kN * (target - f) / KN
-            if p.servo_integral_steps > 0:
-                vmax = p.servo_velocity_m_s
-                s["servo_int"] = float(np.clip(
-                    s.get("servo_int", 0.0) + e * p.control_every / p.servo_integral_steps,
-                    -vmax, vmax))
-                e += s["servo_int"]
-            return float(np.clip(-e, -p.servo_velocity_m_s, p.servo_velocity_m_s))
-        lo, hi = p.cyclic_min_kN * KN, p.cyclic_max_kN * KN
-        bound = hi if s["direction"] < 0 else lo
-        frac = min(1.0, abs(bound - f) / (p.cyclic_braking_fraction * (hi - lo)))
-        v = p.cyclic_v_min_m_s + (p.cyclic_v_max_m_s - p.cyclic_v_min_m_s) * frac
-        return float(s["direction"] * v)
-
-    def advance(self):
-        """Set the ball's velocity, run ``control_every`` steps, measure, update."""
-        rig, p, s = self.rig, self.rig.params, self.s
-        sim, lb = rig.sim, rig.layout.loading
-        sim.set_clump_velocity(lb, vel=(0.0, self._velocity(s["f_prev"])), omega=0.0,
-                               held=True)
-        sim.run(p.control_every)
-        f, y = rig.loading_force(), rig.loading_y()
-        self.samples["step"].append(sim.step)
-        self.samples["cycle"].append(s["cycle"] if s["phase"] == "cyclic" else -1)
-        self.samples["force"].append(f)
-        self.samples["y"].append(y)
-        getattr(self, "_" + s["phase"])(f, y)
-        s["f_prev"], s["y_prev"] = f, y
-        if self._ckpt_due:
-            self._ckpt_due = False
+    # --------------------------------------------------------------- events
+    def advance(self, max_steps=None):
+        """Run the engine until a controller's event (or ``max_steps``), then react."""
+        p, s, sim, c = self.rig.params, self.s, self.rig.sim, self.control
+        n = max_steps or (c.capacity - 1) * p.control_every
+        sim.run(n, control=c)
+        self._book_samples(c.drain())
+        event, _ = c.event
+        c.clear_event()
+        if event == WINDOW:
+            self._window()
+        elif event == PEAK:
+            self._peak()
+        elif event == TROUGH:
+            self._trough()
+        self._check_stalled()
+        if self._checkpoint_due:
+            self._checkpoint_due = False
             self.save_checkpoint(self.checkpoint)
 
-    def _static(self, f, y):
-        p, s = self.rig.params, self.s
-        if not s["touched"]:
-            # approach: the ball travels down at the servo's top speed until it presses the
-            # plate (5 % of the first load); the 10,000-step windows count from that contact,
-            # so a plate still settling under its own weight does not use them up
-            if f < 0.05 * p.static_loads_kN[0] * KN:
-                s["approach_steps"] = s.get("approach_steps", 0) + p.control_every
-                if s["approach_steps"] > p.static_max_windows * p.static_window_steps:
-                    raise RuntimeError(f"the loading ball did not reach the plate within "
-                                       f"{s['approach_steps']} steps")
-                return
-            s["touched"] = True
-        s["win_sum"] += f
-        s["win_bottom"] += float(self.rig.bottom_forces().sum())
-        s["win_side"] += float(-self.rig.side_forces()[:, 1].sum())
-        s["win_n"] += 1
-        s["win_steps"] += p.control_every
-        if s["win_steps"] < p.static_window_steps:
-            return
-        target = p.static_loads_kN[s["target"]] * KN
-        mean = s["win_sum"] / s["win_n"]
-        walls = (s["win_bottom"] / s["win_n"], s["win_side"] / s["win_n"])
-        s["win_sum"], s["win_n"], s["win_steps"] = 0.0, 0, 0
-        s["win_bottom"], s["win_side"] = 0.0, 0.0
-        s["windows"] += 1
-        if abs(mean - target) / target < p.static_tolerance:
-            s["static_mean"].append(mean)
-            s["static_walls"].append(walls)     # mean bottom, side-wall vertical force
-            s["target"] += 1
-            s["servo_int"] = 0.0
-            s["windows"] = 0
-            if s["target"] == len(p.static_loads_kN):
-                s["phase"] = "unload"
-                s["direction"] = 1
-                s["static_end_step"] = self.rig.sim.step
-                s["y_ref"] = y
-        elif s["windows"] >= p.static_max_windows:
-            raise RuntimeError(f"static load {target / KN:g} kN not reached within "
-                               f"{p.static_max_windows} windows (last mean {mean / KN:.3f} kN)")
+    def _book_samples(self, rows):
+        label = self.s.cycle if self.s.phase == "cyclic" else -1
+        self.samples["step"].extend(int(v) for v in rows[:, 0])
+        self.samples["cycle"].extend([label] * len(rows))
+        self.samples["force"].extend(rows[:, 1 + FORCE].tolist())
+        self.samples["y"].extend(rows[:, 1 + Y].tolist())
 
-    def _unload(self, f, y):
-        if f <= self.rig.params.cyclic_min_kN * KN:
-            self.s["phase"] = "cyclic"
+    def _check_stalled(self):
+        p, s, sim, c = self.rig.params, self.s, self.rig.sim, self.control
+        approach = c.get(SERVO, "approach_steps")
+        if s.phase == "static" and approach > p.static_max_windows * p.static_window_steps:
+            raise RuntimeError(f"the loading ball did not reach the plate within "
+                               f"{approach:.0f} steps")
+        if s.phase == "cyclic" and sim.step - s.cycle_start_step > p.max_cycle_steps:
+            raise RuntimeError(f"cycle {s.cycle} did not finish within {p.max_cycle_steps} "
+                               f"steps (force {c.reading(FORCE) / KN:.2f} kN)")
+
+    def _window(self):
+        """A static window is complete: next load if its mean is within tolerance."""
+        p, s, c = self.rig.params, self.s, self.control
+        means = c.window_means()
+        target = p.static_loads_kN[s.target] * KN
+        s.windows += 1
+        if abs(means[FORCE] - target) / target < p.static_tolerance:
+            s.static_mean.append(float(means[FORCE]))
+            s.static_walls.append((float(means[BOTTOM]), float(means[SIDE])))
+            s.target += 1
+            s.windows = 0
+            c.set(SERVO, integral=0.0)
+            if s.target < len(p.static_loads_kN):
+                c.set(SERVO, target=p.static_loads_kN[s.target] * KN)
+            else:                      # unload towards the cyclic minimum
+                c.set(SERVO, active=False)
+                c.set(PROFILE, active=True, direction=1)
+                s.phase = "unload"
+                s.static_end_step = self.rig.sim.step
+                s.y_ref = c.reading(Y)
+        elif s.windows >= p.static_max_windows:
+            raise RuntimeError(f"static load {target / KN:g} kN not reached within "
+                               f"{p.static_max_windows} windows (last mean "
+                               f"{means[FORCE] / KN:.3f} kN)")
+
+    def _trough(self):
+        if self.s.phase == "cyclic":
+            self._end_cycle()
+        if self.s.phase != "done":
+            self.s.phase = "cyclic"
             self._start_cycle()
 
     def _start_cycle(self):
         s = self.s
-        s["direction"] = -1
-        s["cyc_start"] = self.rig.sim.step
-        s["cyc_sample0"] = len(self.samples["step"])
-        s["fmax"], s["fmin"], s["y30"], s["peak"] = -1e300, 1e300, float("nan"), None
+        s.cycle_start_step = self.rig.sim.step
+        s.cycle_sample0 = len(self.samples["step"])
+        s.peak_sample, s.peak = -1, None
 
-    def _cyclic(self, f, y):
-        p, s, rig = self.rig.params, self.s, self.rig
-        s["fmax"], s["fmin"] = max(s["fmax"], f), min(s["fmin"], f)
-        fs = p.settlement_force_kN * KN
-        if s["direction"] < 0:
-            if s["f_prev"] < fs <= f and np.isnan(s["y30"]):
-                w = (fs - s["f_prev"]) / (f - s["f_prev"])
-                s["y30"] = s["y_prev"] + w * (y - s["y_prev"])
-            if f >= p.cyclic_max_kN * KN:
-                s["direction"] = 1
-                self._peak(y)
-        elif f <= p.cyclic_min_kN * KN:
-            self._end_cycle(y)
-            if s["phase"] == "cyclic":
-                self._start_cycle()
-        if rig.sim.step - s["cyc_start"] > p.max_cycle_steps:
-            raise RuntimeError(f"cycle {s['cycle']} did not finish within "
-                               f"{p.max_cycle_steps} steps (force {f / KN:.2f} kN)")
-
-    def _peak(self, y):
+    def _peak(self):
         rig, s = self.rig, self.s
+        s.peak_sample = len(self.samples["step"]) - 1
         px, py, pa = rig.plate_state()
-        s["peak"] = dict(y=y, px=px, py=py, pa=pa)
+        contacts = rig.sim.contact_list()
+        s.peak = dict(y=self.control.reading(Y), px=px, py=py, pa=pa,
+                      contacts=len(contacts["i"]))
         self.bottom.append(rig.bottom_forces())
         self.side.append(rig.side_forces())
-        c = s["cycle"]
+        c = s.cycle
         snap = rig.params.snapshot_every
-        contacts = rig.sim.contact_list()
-        s["peak"]["contacts"] = len(contacts["i"])
         if snap > 0 and (c % snap == 0 or c == self.cycles - 1):
             b = rig.sim.balls
             self.snap_cycles.append(c)
@@ -222,32 +235,46 @@ class LoadingRun:
             self.snap_contacts.append(
                 {k: contacts[k][keep] for k in ("i", "j", "fx", "fy", "x", "y")})
 
-    def _end_cycle(self, y):
+    def _settlement_height(self):
+        """Loading-ball height where the force first crosses the settlement force on the
+        loading branch (linear between the samples around it; nan if it does not)."""
+        fs = self.rig.params.settlement_force_kN * KN
+        k0, kp = self.s.cycle_sample0, self.s.peak_sample
+        f, y = self.samples["force"], self.samples["y"]
+        for k in range(max(k0, 1), kp + 1):
+            if f[k - 1] < fs <= f[k]:
+                w = (fs - f[k - 1]) / (f[k] - f[k - 1])
+                return y[k - 1] + w * (y[k] - y[k - 1])
+        return float("nan")
+
+    def _end_cycle(self):
         rig, s = self.rig, self.s
         px, py, pa = rig.plate_state()
-        pk = s["peak"] or dict(y=np.nan, px=np.nan, py=np.nan, pa=np.nan, contacts=0)
-        modes = rig.sim.log.mode[s["log0"]: rig.sim.n_breakages]
-        row = dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s["cyc_start"],
-                   force_max=s["fmax"], force_min=s["fmin"], y_at_settlement_force=s["y30"],
-                   y_at_peak=pk["y"], y_at_end=y, plate_x_at_peak=pk["px"],
-                   plate_y_at_peak=pk["py"], plate_angle_at_peak=pk["pa"], plate_x=px,
-                   plate_y=py, plate_angle=pa, elements_broken_tension=int((modes == 1).sum()),
-                   elements_broken_shear=int((modes == 2).sum()), contacts=pk["contacts"])
+        pk = s.peak or dict(y=np.nan, px=np.nan, py=np.nan, pa=np.nan, contacts=0)
+        modes = rig.sim.breakages()["mode"][s.log0:]
+        force = self.samples["force"][s.cycle_sample0:]
+        row = dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
+                   force_max=max(force), force_min=min(force),
+                   y_at_settlement_force=self._settlement_height(),
+                   y_at_peak=pk["y"], y_at_end=self.control.reading(Y),
+                   plate_x_at_peak=pk["px"], plate_y_at_peak=pk["py"],
+                   plate_angle_at_peak=pk["pa"], plate_x=px, plate_y=py, plate_angle=pa,
+                   elements_broken_tension=int(np.sum(modes == "tension")),
+                   elements_broken_shear=int(np.sum(modes == "shear")),
+                   contacts=pk["contacts"])
         for k, v in row.items():
             self.cyc[k].append(v)
-        s["rows"].append(self.behaviours())
-        self._thin_samples(s["cyc_sample0"])
-        c = s["cycle"]
+        s.rows.append(self.behaviours())
+        self._thin_samples(s.cycle_sample0)
         for hook in self.hooks:
-            hook(self, c)
-        s["cycle"] += 1
-        if s["cycle"] >= self.cycles:
-            s["phase"] = "done"
-        if s["cycle"] % self.checkpoint_every == 0:
+            hook(self, s.cycle)
+        s.cycle += 1
+        if s.cycle >= self.cycles:
+            s.phase = "done"
+        if s.cycle % self.checkpoint_every == 0:
             self.solid_cache.clear()
-        if self.checkpoint and (s["cycle"] % self.checkpoint_every == 0
-                                or s["phase"] == "done"):
-            self._ckpt_due = True      # saved once this control step is complete
+        if self.checkpoint and (s.cycle % self.checkpoint_every == 0 or s.phase == "done"):
+            self._checkpoint_due = True     # saved once the next cycle has begun
 
     def _thin_samples(self, k0):
         """Keep every ``timeseries_every``-th sample of the finished cycle (and its last),
@@ -286,9 +313,8 @@ class LoadingRun:
         bottom_seg = sim.walls.seg[lay.bottom]
         px, py, _ = rig.plate_state()
         p = rig.params
-        k0 = s["cyc_sample0"]
-        br = sim.log
-        nlog = int(br.n[0])
+        k0 = s.cycle_sample0
+        br = sim.breakages()
         return dict(
             pos=b.pos.copy(), rad=b.rad.copy(), ballast=ballast,
             bond_i=bd.i, bond_j=bd.j,
@@ -304,14 +330,15 @@ class LoadingRun:
             bottom_width=np.abs(bottom_seg[:, 2] - bottom_seg[:, 0]),
             load_y=np.asarray(self.samples["y"][k0:]),
             load_force=np.asarray(self.samples["force"][k0:]),
-            break_step=br.step[s["log0"]:nlog].copy(), break_mode=br.mode[s["log0"]:nlog].copy(),
-            n_bonds_installed=int(s["n_bonds0"]), n_elements_per_bond=int(bd.state.shape[1]),
-            cycle_start_step=int(s["cyc_start"]), cycle_end_step=int(sim.step) + 1)
+            break_step=br["step"][s.log0:],
+            break_mode=np.where(br["mode"][s.log0:] == "tension", 1, 2).astype(np.int32),
+            n_bonds_installed=int(s.n_bonds0), n_elements_per_bond=int(bd.state.shape[1]),
+            cycle_start_step=int(s.cycle_start_step), cycle_end_step=int(sim.step) + 1)
 
     def behaviours(self):
         """This cycle's behaviours from ``ballaststudy.metrics`` (JSON-safe dict)."""
         from ..metrics import compute_cycle
-        rows = self.s["rows"]
+        rows = self.s.rows
         ref = rows[0].get("y_at_level") if rows else None
         out = compute_cycle(self.snapshot(), self.metrics_params, y_reference=ref,
                             solid_cache=self.solid_cache)
@@ -321,14 +348,14 @@ class LoadingRun:
     # --------------------------------------------------------------- driving
     def run(self, progress=None, stop_after=None):
         """Run until ``cycles`` are done (or ``stop_after`` further cycles: an interruption
-        for tests). ``progress(phase, cycle)`` is called after each control step."""
+        for tests). ``progress(phase, cycle)`` is called after each event or chunk."""
         s = self.s
-        c0 = s["cycle"]
-        while s["phase"] != "done":
+        c0 = s.cycle
+        while s.phase != "done":
             self.advance()
             if progress is not None:
-                progress(s["phase"], s["cycle"])
-            if stop_after is not None and s["cycle"] - c0 >= stop_after:
+                progress(s.phase, s.cycle)
+            if stop_after is not None and s.cycle - c0 >= stop_after:
                 break
         return self
 
@@ -354,7 +381,8 @@ class LoadingRun:
         """Engine checkpoint + rig layout + loading state + records, one npz, atomic."""
         data = self._arrays()
         data["engine"] = np.frombuffer(self.rig.engine_bytes(), np.uint8)
-        data["state"] = np.array(json.dumps(self.s))
+        data["state"] = np.array(json.dumps(asdict(self.s)))
+        data.update(self.control.to_dict())
         data["layout"] = np.array(json.dumps(vars(self.rig.layout)))
         data["params"] = np.array(json.dumps(self.rig.params.to_dict()))
         data["cycles"] = np.array(self.cycles)
@@ -374,10 +402,11 @@ class LoadingRun:
                      RigParams(**json.loads(str(d["params"]))))
         run = cls(rig, int(d["cycles"]) if cycles is None else cycles, checkpoint=path,
                   checkpoint_every=checkpoint_every, resumed=True)
-        run.s = json.loads(str(d["state"]))
+        run.s = LoadingState(**json.loads(str(d["state"])))
+        run.control.load(d)
         run._metrics_setup()
-        if run.s["phase"] == "done" and run.s["cycle"] < run.cycles:
-            run.s["phase"] = "cyclic"      # more cycles asked for than were run
+        if run.s.phase == "done" and run.s.cycle < run.cycles:
+            run.s.phase = "cyclic"      # more cycles asked for than were run
             run._start_cycle()
         for k in run.samples:
             run.samples[k] = d["samp_" + k].tolist()

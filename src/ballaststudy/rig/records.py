@@ -19,7 +19,7 @@ def breakage_records(run):
     """Breakages since loading began: dict of arrays incl. the cycle each fell in
     (-1 = static pre-loading / unloading)."""
     br = run.rig.sim.breakages()
-    k0 = run.s["log0"]
+    k0 = run.s.log0
     out = {k: np.asarray(v[k0:]) for k, v in br.items()}
     out["mode_code"] = np.array([1 if m == "tension" else 2 for m in out["mode"]], np.int8)
     ends = np.asarray(run.cyc["cycle_end_step"], float)
@@ -35,7 +35,7 @@ def behaviours(run, ds, n_elements):
     """The behaviours per cycle: ``ballaststudy.metrics`` results computed at the end of
     every cycle (``LoadingRun.behaviours``) when that package is installed; otherwise
     settlement and breakage rates straight from the records (eqs. 4.6-4.8)."""
-    rows = run.s["rows"]
+    rows = run.s.rows
     if rows and all(rows):
         from ..metrics import metrics_dataset
         ds.attrs["metrics_package"] = "ballaststudy.metrics (compute_cycle per cycle)"
@@ -140,14 +140,14 @@ def to_dataset(run, attrs=None):
     data["wall_kind"] = ("wall", wall_kind, {"units": "1", "long_name": "container wall segment",
                                              "flag_values": np.array([0, 1, 2, 3], np.int8),
                                              "flag_meanings": "outside bottom left right"})
-    n_bonds = int(s["n_bonds0"]) * int(rig.sim.bonds.state.shape[1])
+    n_bonds = int(s.n_bonds0) * int(rig.sim.bonds.state.shape[1])
     ds = xr.Dataset(data, coords=coords, attrs={
         "Conventions": "CF-1.8",
         "title": "box-test case: per-cycle records and behaviours (thesis 4.2.3, 4.5.1)",
         "database": lay.database, "seed": lay.seed, "cycles_requested": run.cycles,
-        "y_reference": s["y_ref"], "static_end_step": s["static_end_step"],
-        "static_mean_forces_N": json.dumps(s["static_mean"]),
-        "static_mean_wall_forces_N": json.dumps(s["static_walls"]),
+        "y_reference": s.y_ref, "static_end_step": s.static_end_step,
+        "static_mean_forces_N": json.dumps(s.static_mean),
+        "static_mean_wall_forces_N": json.dumps(s.static_walls),
         "flat_joint_elements_at_loading_start": n_bonds,
         "thickness_m": rig.sim.thickness,
         "force_convention": "2D forces per thickness t (PFC2D); thesis loads applied directly",

@@ -1,0 +1,341 @@
+"""Controllers inside the stepping loop (what LAMMPS calls fixes): sensors, controllers,
+actuators and a sample buffer, run by the stepping kernel every ``every`` steps.
+
+After such a step the sensors are read and sampled; every active controller updates its
+state from its sensor and may raise an event (a servo's averaging window is complete, the
+cyclic profile reverses at a bound). Then either the controllers' velocities are imposed
+on their actuators at once, or — on an event — the kernel returns to Python (status
+``params.CONTROL_EVENT``) before imposing them: the rig reacts (next target, another
+controller, a snapshot at the peak) and the next run imposes them first (``pending``).
+So a rig enters Python at events, checkpoints and progress only, and the order of
+operations is that of a Python loop "run k steps, measure, decide, set the velocity".
+
+Sensors (reading = ``scale`` x quantity):
+  CLUMP_REACTION  force of the contacts on a clump along an axis (net force minus weight)
+  CLUMP_POSITION  a clump's centre along an axis
+  WALL_FORCE      summed force of the balls on a set of wall segments along an axis
+Actuators: HELD_CLUMP (velocity along the axis, other components and spin held at zero),
+WALLS (velocity of a set of segments along the axis).
+Controllers:
+  SERVO   PI force servo, v = -clip(gain (target - f) + I, +-v_max); I integrates
+          gain (target - f) every / integral_steps, clipped at +-v_max (no wind-up). It
+          first approaches (v_max towards the target) until the reading reaches ``touch``;
+          from then on it averages every sensor over windows of ``window_steps``.
+  CYCLIC  bound-to-bound profile: moves with sign ``direction`` at v_max until the reading
+          is within ``brake`` x (hi - lo) of the bound it approaches, then linearly down
+          to v_min at the bound; reverses at hi (event PEAK) and at lo (event TROUGH).
+
+All arrays live in one named container (``ControlArrays``); the ``Control`` class builds it
+and saves/restores it (rigs keep it in their checkpoints).
+"""
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from . import params as P
+from .jit import NO_NRT
+
+# cfg slots (int64)
+EVERY, COUNT, PENDING, EVENT, EVENT_CONTROLLER, NSAMP, WINDOW_N = range(7)
+NCFG = 7
+# sensor kinds, actuator kinds, controller kinds
+CLUMP_REACTION, CLUMP_POSITION, WALL_FORCE = 0, 1, 2
+HELD_CLUMP, WALLS = 0, 1
+SERVO, CYCLIC = 1, 2
+# events
+NO_EVENT, WINDOW, PEAK, TROUGH, BUFFER_FULL = 0, 1, 2, 3, 4
+EVENT_NAMES = {WINDOW: "window", PEAK: "peak", TROUGH: "trough", BUFFER_FULL: "buffer full"}
+# controller parameters (cpar columns) and state (cst columns)
+TARGET, GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, WINDOW_STEPS, TOUCH = range(7)
+LO, HI, VMIN, BRAKE = 0, 1, 2, 4          # CYCLIC: VMAX = 3 as above
+INTEGRAL, TOUCHED, APPROACH_STEPS, WINDOW_DONE = range(4)
+DIRECTION = 0
+NPAR, NST = 8, 4
+assert VMAX == 3
+
+_STATE = {"integral": INTEGRAL, "touched": TOUCHED, "approach_steps": APPROACH_STEPS,
+          "window_done": WINDOW_DONE, "direction": DIRECTION}
+_SERVO_PAR = {"target": TARGET, "gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": VMAX,
+              "integral_steps": INTEGRAL_STEPS, "window_steps": WINDOW_STEPS, "touch": TOUCH}
+_CYCLIC_PAR = {"lo": LO, "hi": HI, "v_min": VMIN, "v_max": VMAX, "brake": BRAKE}
+
+ControlArrays = namedtuple(
+    "ControlArrays", "cfg sensors members scale actuators ctl cpar cst val wsum samp")
+
+
+# ------------------------------------------------------------------------- kernels
+@njit(**NO_NRT)
+def read_sensors(prm, clumps, walls, c):
+    for s in range(c.sensors.shape[0]):
+        kind, a, b, ax = c.sensors[s, 0], c.sensors[s, 1], c.sensors[s, 2], c.sensors[s, 3]
+        if kind == CLUMP_REACTION:
+            v = clumps.force[a, ax] - clumps.mass[a] * prm[P.GX + ax]
+        elif kind == CLUMP_POSITION:
+            v = clumps.pos[a, ax]
+        else:
+            v = 0.0
+            for m in range(a, b):
+                v += walls.force[c.members[m], ax]
+        c.val[s] = c.scale[s] * v
+
+
+@njit(**NO_NRT)
+def _servo_update(c, k):
+    """Approach, then window averaging of every sensor. Returns an event code."""
+    st, par = c.cst[k], c.cpar[k]
+    if st[TOUCHED] == 0.0:
+        if c.val[c.ctl[k, 1]] < par[TOUCH]:
+            st[APPROACH_STEPS] += c.cfg[EVERY]
+            return NO_EVENT
+        st[TOUCHED] = 1.0
+    for s in range(c.val.shape[0]):
+        c.wsum[s] += c.val[s]
+    c.cfg[WINDOW_N] += 1
+    st[WINDOW_DONE] += c.cfg[EVERY]
+    return WINDOW if st[WINDOW_DONE] >= par[WINDOW_STEPS] else NO_EVENT
+
+
+@njit(**NO_NRT)
+def _cyclic_update(c, k):
+    st, par = c.cst[k], c.cpar[k]
+    f = c.val[c.ctl[k, 1]]
+    if st[DIRECTION] < 0.0:
+        if f >= par[HI]:
+            st[DIRECTION] = 1.0
+            return PEAK
+    elif f <= par[LO]:
+        st[DIRECTION] = -1.0
+        return TROUGH
+    return NO_EVENT
+
+
+@njit(**NO_NRT)
+def controller_velocity(c, k):
+    """The velocity controller k commands from its sensor's last reading (the servo's
+    integral advances: call once per control step)."""
+    st, par = c.cst[k], c.cpar[k]
+    f = c.val[c.ctl[k, 1]]
+    vmax = par[VMAX]
+    if c.ctl[k, 0] == SERVO:
+        e = par[GAIN] * (par[TARGET] - f) / par[GAIN_UNIT]
+        if par[INTEGRAL_STEPS] > 0.0:
+            st[INTEGRAL] = min(max(st[INTEGRAL] + e * float(c.cfg[EVERY]) / par[INTEGRAL_STEPS],
+                                   -vmax), vmax)
+            e += st[INTEGRAL]
+        return min(max(-e, -vmax), vmax)
+    bound = par[HI] if st[DIRECTION] < 0.0 else par[LO]
+    frac = min(1.0, abs(bound - f) / (par[BRAKE] * (par[HI] - par[LO])))
+    return st[DIRECTION] * (par[VMIN] + (vmax - par[VMIN]) * frac)
+
+
+@njit(**NO_NRT)
+def actuate(clumps, walls, c):
+    """Impose every active controller's velocity on its actuator."""
+    c.cfg[PENDING] = 0
+    for k in range(c.ctl.shape[0]):
+        if c.ctl[k, 3] == 0:
+            continue
+        v = controller_velocity(c, k)
+        kind, a, b, ax = (c.actuators[c.ctl[k, 2], 0], c.actuators[c.ctl[k, 2], 1],
+                          c.actuators[c.ctl[k, 2], 2], c.actuators[c.ctl[k, 2], 3])
+        if kind == HELD_CLUMP:
+            clumps.held[a] = 1
+            clumps.vel[a, ax] = v
+            clumps.vel[a, 1 - ax] = 0.0
+            clumps.omega[a] = 0.0
+        else:
+            for m in range(a, b):
+                walls.vel[c.members[m], ax] = v
+
+
+@njit(**NO_NRT)
+def control_step(prm, step, clumps, walls, c):
+    """Once every ``every`` steps, after the step: read, sample, update; impose the
+    velocities unless an event asks Python first. Returns True on an event."""
+    c.cfg[COUNT] += 1
+    if c.cfg[COUNT] < c.cfg[EVERY]:
+        return False
+    c.cfg[COUNT] = 0
+    read_sensors(prm, clumps, walls, c)
+    n = c.cfg[NSAMP]
+    c.samp[n, 0] = step
+    for s in range(c.val.shape[0]):
+        c.samp[n, 1 + s] = c.val[s]
+    c.cfg[NSAMP] = n + 1
+    event = NO_EVENT
+    for k in range(c.ctl.shape[0]):
+        if c.ctl[k, 3] == 0:
+            continue
+        e = _servo_update(c, k) if c.ctl[k, 0] == SERVO else _cyclic_update(c, k)
+        if e != NO_EVENT and event == NO_EVENT:
+            event = e
+            c.cfg[EVENT_CONTROLLER] = k
+    if event == NO_EVENT and n + 1 == c.samp.shape[0]:
+        event = BUFFER_FULL
+    c.cfg[EVENT] = event
+    if event != NO_EVENT:
+        c.cfg[PENDING] = 1
+        return True
+    actuate(clumps, walls, c)
+    return False
+
+
+# ------------------------------------------------------------------------- Python side
+class Control:
+    """Builder and owner of a ``ControlArrays``. Add sensors, actuators and controllers
+    (each call returns an index), then pass the object to ``Simulation.run(control=...)``.
+    Samples are rows (step, reading of sensor 0, 1, ...) taken every ``every`` steps."""
+
+    def __init__(self, every, capacity=4096):
+        self.every = int(every)
+        self.capacity = int(capacity)
+        self._sensors, self._actuators, self._ctl, self._par = [], [], [], []
+        self._members, self._direction = [], {}
+        self.arrays = None
+
+    def _group(self, ids):
+        a = len(self._members)
+        self._members.extend(int(i) for i in ids)
+        return a, len(self._members)
+
+    def clump_reaction(self, clump, axis, scale=1.0):
+        self._sensors.append(((CLUMP_REACTION, int(clump), 0, int(axis)), float(scale)))
+        return len(self._sensors) - 1
+
+    def clump_position(self, clump, axis):
+        self._sensors.append(((CLUMP_POSITION, int(clump), 0, int(axis)), 1.0))
+        return len(self._sensors) - 1
+
+    def wall_force(self, segments, axis, scale=1.0):
+        a, b = self._group(segments)
+        self._sensors.append(((WALL_FORCE, a, b, int(axis)), float(scale)))
+        return len(self._sensors) - 1
+
+    def held_clump(self, clump, axis):
+        self._actuators.append((HELD_CLUMP, int(clump), 0, int(axis)))
+        return len(self._actuators) - 1
+
+    def walls(self, segments, axis):
+        a, b = self._group(segments)
+        self._actuators.append((WALLS, a, b, int(axis)))
+        return len(self._actuators) - 1
+
+    def servo(self, sensor, actuator, target, gain, v_max, integral_steps, window_steps,
+              touch=-np.inf, gain_unit=1.0, active=True):
+        """PI servo: ``gain`` in m/s per ``gain_unit`` newtons (1e3: m/s per kN)."""
+        par = np.zeros(NPAR)
+        par[[TARGET, GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, WINDOW_STEPS, TOUCH]] = (
+            target, gain, gain_unit, v_max, integral_steps, window_steps, touch)
+        return self._add(SERVO, sensor, actuator, active, par)
+
+    def cyclic(self, sensor, actuator, lo, hi, v_min, v_max, brake, direction=-1,
+               active=True):
+        par = np.zeros(NPAR)
+        par[[LO, HI, VMIN, VMAX, BRAKE]] = lo, hi, v_min, v_max, brake
+        k = self._add(CYCLIC, sensor, actuator, active, par)
+        self._direction[k] = direction
+        return k
+
+    def _add(self, kind, sensor, actuator, active, par):
+        self._ctl.append((kind, sensor, actuator, 1 if active else 0))
+        self._par.append(par)
+        return len(self._ctl) - 1
+
+    def build(self):
+        """Allocate the arrays (first run imposes the controllers' velocities)."""
+        ns = len(self._sensors)
+        cst = np.zeros((len(self._ctl), NST))
+        for k, d in self._direction.items():
+            cst[k, DIRECTION] = d
+        cfg = np.zeros(NCFG, np.int64)
+        cfg[EVERY], cfg[PENDING] = self.every, 1
+        self.arrays = ControlArrays(
+            cfg, np.array([s for s, _ in self._sensors], np.int64).reshape(ns, 4),
+            np.array(self._members, np.int64), np.array([g for _, g in self._sensors]),
+            np.array(self._actuators, np.int64).reshape(-1, 4),
+            np.array(self._ctl, np.int64).reshape(-1, 4),
+            np.array(self._par).reshape(-1, NPAR), cst, np.zeros(ns), np.zeros(ns),
+            np.zeros((self.capacity, 1 + ns)))
+        return self
+
+    @staticmethod
+    def empty():
+        """The container of 'no control' (every = 0)."""
+        z = np.zeros((0, 4), np.int64)
+        return ControlArrays(np.zeros(NCFG, np.int64), z, np.zeros(0, np.int64), np.zeros(0),
+                             z, z, np.zeros((0, NPAR)), np.zeros((0, NST)), np.zeros(0),
+                             np.zeros(0), np.zeros((1, 1)))
+
+    # --------------------------------------------------------- reading and steering
+    @property
+    def event(self):
+        """(event code, controller) of the last run's stop, NO_EVENT if none."""
+        c = self.arrays.cfg
+        return int(c[EVENT]), int(c[EVENT_CONTROLLER])
+
+    def clear_event(self):
+        self.arrays.cfg[EVENT] = NO_EVENT
+
+    def drain(self):
+        """Samples since the last drain, (k, 1 + n_sensors), and empty the buffer."""
+        n = int(self.arrays.cfg[NSAMP])
+        out = self.arrays.samp[:n].copy()
+        self.arrays.cfg[NSAMP] = 0
+        return out
+
+    def reading(self, sensor):
+        return float(self.arrays.val[sensor])
+
+    def window_means(self):
+        """Mean reading of every sensor over the servo window just completed; resets it."""
+        a = self.arrays
+        means = a.wsum / a.cfg[WINDOW_N]
+        a.wsum[:] = 0.0
+        a.cfg[WINDOW_N] = 0
+        a.cst[:, WINDOW_DONE] = 0.0
+        return means
+
+    def _slot(self, k, name):
+        a = self.arrays
+        if name in _STATE:
+            return a.cst, _STATE[name]
+        if a.ctl[k, 0] == SERVO:
+            return a.cpar, _SERVO_PAR[name]
+        return a.cpar, _CYCLIC_PAR[name]
+
+    def set(self, k, **values):
+        """Change controller k's parameters (target=..., ...) or state (integral=...,
+        direction=...) or switch it (active=True/False)."""
+        for name, v in values.items():
+            if name == "active":
+                self.arrays.ctl[k, 3] = 1 if v else 0
+            else:
+                table, col = self._slot(k, name)
+                table[k, col] = v
+
+    def get(self, k, name):
+        if name == "active":
+            return bool(self.arrays.ctl[k, 3])
+        table, col = self._slot(k, name)
+        return float(table[k, col])
+
+    def velocity(self, k, reading):
+        """What controller k would command at ``reading`` (advances a servo's integral)."""
+        a = self.arrays
+        s = a.ctl[k, 1]
+        old = a.val[s]
+        a.val[s] = reading
+        try:
+            return float(controller_velocity(a, k))
+        finally:
+            a.val[s] = old
+
+    def to_dict(self, prefix="control_"):
+        return {prefix + n: np.asarray(v) for n, v in zip(ControlArrays._fields, self.arrays)}
+
+    def load(self, d, prefix="control_"):
+        """Restore the arrays saved by ``to_dict`` (the same controllers built)."""
+        self.arrays = ControlArrays(*(np.array(d[prefix + n]) for n in ControlArrays._fields))
+        self.every = int(self.arrays.cfg[EVERY])
+        return self
