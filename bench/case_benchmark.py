@@ -16,7 +16,6 @@ import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
 
 
 def box_test_library(config, cache="results/bench_cache"):

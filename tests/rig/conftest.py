@@ -2,7 +2,7 @@
 library in the bpm package's format, shortened assembly stages, thesis loads."""
 import pytest
 
-from ballaststudy.rig.library import Library, synthetic_library
+from ballaststudy.rig.library import synthetic_library
 from ballaststudy.rig.params import RigParams
 
 SMALL = dict(drop_max_steps=200000, tamping_steps=8000, relax_steps=2000,

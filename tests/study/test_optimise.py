@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from ballaststudy.study import aggregate, check_findings, pareto_set, rank_databases, write_report
+from ballaststudy.study import aggregate, check_findings, pareto_set, rank_databases
 from ballaststudy.study import optimise, stats
 from ballaststudy.study.cli import register
 

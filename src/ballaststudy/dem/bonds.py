@@ -95,7 +95,6 @@ def bond_forces(run, kin, balls, fa, bonds, log):
         gc = d - d0[b]
         le = 2.0 * rbar[b] / ne
         ae = le * t
-        ie = t * le ** 3 / 12.0
         ftot_n = 0.0
         ftot_s = 0.0
         mc = 0.0

@@ -2,7 +2,6 @@
 They are bound as Simulation methods."""
 import numpy as np
 
-from . import params as P
 from .energy import energies  # noqa: F401  (re-exported as a Simulation method)
 
 

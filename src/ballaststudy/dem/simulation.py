@@ -22,7 +22,7 @@ from .bound import stepper, timestep
 from .engine import rebuild_lists
 from .integrate import reset_forces
 from .law import ContactLaw
-from .materials import ContactMaterial, FlatJointMaterial
+from .materials import ContactMaterial
 from .state import Balls, Bonds, BreakLog, Clumps, Pairs, RunState, WallPairs, Walls
 from .submodels import NCOEF, contact_stiffness
 
@@ -262,7 +262,7 @@ class Simulation:
         return self._append_bonds(i, j, mats)
 
     def _append_bonds(self, i, j, mats):
-        b, bd, ne, t = self.balls, self.bonds, self.n_elements, self.prm[P.THICK]
+        b, bd, ne = self.balls, self.bonds, self.n_elements
         rmin = np.minimum(b.rad[i], b.rad[j])
         rsum = b.rad[i] + b.rad[j]
         kn = np.array([m.E for m in mats]) / rsum

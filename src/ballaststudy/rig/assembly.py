@@ -9,79 +9,37 @@ c. balls above the ballast depth deleted, the pressing plate created as a held c
 d. balls outside the test's width deleted, side walls moved to the test's width (bottom
    already in 20 segments there), a loading ball on the plate, relaxation steps.
 
-Each stage is a few "fix"-like operations between engine runs; the engine does the rest.
+Placement and deposition come from the container-independent kit (deposition.py); this
+module adds the box: its walls, the cut at the ballast depth, the plate, the side walls
+moved in, the loading ball.
 """
 import numpy as np
 
-from ..dem import ContactMaterial, Simulation
+from ..dem import ContactMaterial
 from .box import BoxRig, RigLayout
+from .deposition import (centripetal_pulses, choose_stones, deposition_conditions, drop,
+                         new_simulation, place_stones, ramp_gravity, remove_debris, settle,
+                         shelf_centres)
 
 STEEL = 2        # material id of the plate, loading ball and walls (same LC law, Table 4.2)
 
 
-def choose_stones(lib, params, rng):
-    """Library indices drawn with replacement until the ball area reaches
-    fill_area_ratio * width * depth."""
-    target = params.fill_area_ratio * params.width_m * params.depth_m
-    picks, area = [], 0.0
-    while area < target:
-        k = int(rng.integers(len(lib)))
-        picks.append(k)
-        area += lib.stone(k).area
-        if len(picks) > 100000:
-            raise ValueError("library stones are too small for the container")
-    return picks
-
-
-def assembly_conditions(rig, mu, on):
-    """While dropping and tamping (``on``): friction ``assembly_friction`` for every contact
-    (a dense specimen; None keeps Table 4.2's) and density scaling at ``assembly_dt_factor``
-    (only the packing at rest matters there). Off: friction ``mu`` (Table 4.2) and the real
-    masses. Returns the steps run (one: the first neighbour build gives dt_crit)."""
-    p, sim = rig.params, rig.sim
-    if not on:
-        sim.set_contact_coefficient("mu", mu)   # the loading contact has Table 4.2's mu too
-        sim.set_density_scaling(None)
-        return 0
-    if p.assembly_friction is not None:
-        sim.set_contact_coefficient("mu", p.assembly_friction)
-    if p.assembly_dt_factor <= 1.0:
-        return 0
-    sim.run(1)
-    sim.set_density_scaling(p.assembly_dt_factor * sim.dt)
-    return 1
-
-
 def build_tall(lib, params, seed, contact_damping=None):
-    """Stage a: stones on a grid in the tall container; bonds installed. Returns a BoxRig."""
+    """Stage a: stones on shelves in the tall container; bonds installed. Returns a BoxRig."""
     p = params
     rng = np.random.default_rng(seed)
-    picks = choose_stones(lib, p, rng)
+    picks = choose_stones(lib, p.fill_area_ratio * p.width_m * p.depth_m, rng)
     stones = [lib.stone(k) for k in picks]
     wt = p.tall_width_factor * p.width_m
-    # shelf packing: stones left to right in rows, each in a disk of its own extent times
-    # placement_gap_factor; every row starts at a random offset so no columns form
-    centres, x, y, row_h = [], None, 0.0, 0.0
-    for s in stones:
-        e = p.placement_gap_factor * s.extent
-        if x is None or x + 2 * e > 0.5 * wt:
-            y += row_h
-            x = -0.5 * wt + rng.uniform(0.0, 0.5) * e
-            row_h = 0.0
-        centres.append((x + e, y + e))
-        x += 2 * e
-        row_h = max(row_h, 2 * e)
-    h_tall = y + row_h + p.height_m
+    centres, top = shelf_centres(stones, -0.5 * wt, 0.5 * wt, p.placement_gap_factor, rng)
+    h_tall = top + p.height_m
     margin = max(0.5 * wt, 0.1)
-    sim = Simulation(thickness=lib.thickness, gravity=(0.0, -p.drop_gravity_m_s2),
-                     damping=p.drop_damping, dt_safety=p.dt_safety,
-                     domain=(-0.5 * wt - margin, -margin, 0.5 * wt + margin, h_tall + margin))
-    beta = p.contact_damping_ratio if contact_damping is None else contact_damping
-    lc = lib.materials[0]["lc"]
-    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=lc.mu, beta_n=beta,
-                                             beta_s=beta))
+    sim = new_simulation(lib, p, (-0.5 * wt - margin, -margin, 0.5 * wt + margin,
+                                  h_tall + margin),
+                         p.contact_damping_ratio if contact_damping is None else contact_damping)
     # the loading ball sits loosely on the plate (not rigidly coupled, thesis 4.1): a softer,
     # damped steel-steel contact so the velocity-controlled ball does not hammer the plate
+    lc = lib.materials[0]["lc"]
     sim.set_contact_material(ContactMaterial(E=p.loading_contact_E_Pa, kappa=lc.kappa, mu=lc.mu,
                                              beta_n=p.loading_contact_damping_ratio,
                                              beta_s=p.loading_contact_damping_ratio),
@@ -100,103 +58,11 @@ def build_tall(lib, params, seed, contact_damping=None):
     lay.right = sim.add_wall([(t2, 0.0), (t2, p.height_m), (t2, h_tall)],
                              material_id=STEEL).tolist()
     lay.left_low, lay.right_low = lay.left[1], lay.right[0]
-    # stones: one per cell, random rotation, random shift within the cell's slack
-    for k, s in enumerate(stones):
-        cx, cy = centres[k]
-        a = rng.uniform(0, 2 * np.pi)
-        ca, sa = np.cos(a), np.sin(a)
-        x = cx + ca * s.x - sa * s.y
-        y = cy + sa * s.x + ca * s.y
-        rho = lib.materials[s.material]["density"]
-        sim.add_balls(x, y, s.r, rho, stone_id=k, material_id=s.material)
-        lay.bonds_library += len(s.bond_i)
+    lay.bonds_library = place_stones(sim, lib, stones, centres, rng)
     lay.n_stone_balls = len(sim.balls)
     fj = {m: lib.materials[m]["fj"] for m in (0, 1)}
     lay.bonds_installed = int(sim.install_flat_joints(fj))
     return BoxRig(sim, lay, p)
-
-
-def ramp_gravity(rig, g_from, g_to, steps, progress=None):
-    """Change gravity geometrically in 20 stages over ``steps`` (damped): an abrupt drop
-    from 1000 m/s^2 would release the pile's elastic energy and throw the stones up."""
-    sim = rig.sim
-    n = max(1, steps // 20)
-    for g in np.geomspace(g_from, g_to, 20):
-        sim.set_gravity((0.0, -float(g)))
-        sim.run(n)
-        if progress is not None:
-            progress(n)
-    return 20 * n
-
-
-def settle(rig, progress=None):
-    """Run until the mean speed of the stone balls is below ``settle_speed_m_s`` (checked
-    every ``settle_check_every`` steps, at most ``settle_max_steps``): a pile that is in
-    equilibrium at a high gravity stays so when the gravity is lowered, while one that
-    is still moving would take very long to settle at 9.81 m/s^2 (local damping)."""
-    p, sim = rig.params, rig.sim
-    steps = 0
-    while steps < p.settle_max_steps:
-        sim.run(p.settle_check_every)
-        steps += p.settle_check_every
-        if progress is not None:
-            progress(p.settle_check_every)
-        ids = rig.stone_balls()
-        if np.mean(np.hypot(*sim.balls.vel[ids].T)) < p.settle_speed_m_s:
-            break
-    return steps
-
-
-def remove_debris(rig):
-    """Delete fragments of fewer than ``min_fragment_balls`` balls that the cuts made out
-    of larger stones (loose single balls would rattle in the voids for a long time)."""
-    p, sim = rig.params, rig.sim
-    if p.min_fragment_balls <= 1:
-        return 0
-    ids = rig.stone_balls()
-    frag = rig.fragments()
-    size = np.bincount(frag[ids])
-    stone_size = np.bincount(sim.balls.stone[ids])
-    small = size[frag[ids]] < p.min_fragment_balls
-    cut = stone_size[sim.balls.stone[ids]] > size[frag[ids]]     # the stone lost balls
-    gone = ids[small & cut]
-    sim.delete_balls(gone)
-    return len(gone)
-
-
-def _stone_means(rig, values):
-    """Per-stone mean of a per-ball quantity over live stone balls."""
-    b = rig.sim.balls
-    ids = rig.stone_balls()
-    st = b.stone[ids]
-    n = np.bincount(st, minlength=len(rig.layout.stone_library_index))
-    s = np.bincount(st, weights=values[ids], minlength=len(n))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return s / n, n
-
-
-def drop(rig, progress=None):
-    """Stage b: free fall under drop_gravity with bonds strengthened until the highest
-    stone's mean vertical velocity turns upward (or stops). Returns the steps run."""
-    p, sim = rig.params, rig.sim
-    sim.scale_bond_strength(p.drop_bond_factor)
-    state = {"fell": False, "steps": 0}
-
-    def watch(s):
-        b = s.balls
-        ymean, n = _stone_means(rig, b.pos[:, 1])
-        vmean, _ = _stone_means(rig, b.vel[:, 1])
-        top = int(np.nanargmax(np.where(n > 0, ymean, -np.inf)))
-        v = vmean[top]
-        state["steps"] += p.drop_check_every
-        if progress is not None:
-            progress(p.drop_check_every)
-        if v < -1e-3:
-            state["fell"] = True
-        return state["fell"] and v >= 0.0
-
-    sim.run(p.drop_max_steps, callback=watch, every=p.drop_check_every)
-    return state["steps"] + settle(rig, progress)
 
 
 def tamp(rig, progress=None):
@@ -209,24 +75,13 @@ def tamp(rig, progress=None):
     p, sim, lay = rig.params, rig.sim, rig.layout
     done = ramp_gravity(rig, p.drop_gravity_m_s2, p.tamping_gravity_m_s2, p.gravity_ramp_steps,
                         progress)
-    pulses = max(1, p.tamping_pulses)
-    per = max(1, p.tamping_steps // pulses)
-    for _ in range(pulses):
-        ids = rig.stone_balls()
-        xm, _ = _stone_means(rig, sim.balls.pos[:, 0])
-        v = -p.tamping_velocity_m_s * np.clip(xm / (0.5 * p.width_m * p.tall_width_factor), -1, 1)
-        st = sim.balls.stone[ids]
-        vel = sim.balls.vel[ids].copy()
-        vel[:, 0] = v[st]
-        sim.set_ball_velocity(ids, vel=vel)
-        sim.run(per)
-        if progress is not None:
-            progress(per)
-    done += settle(rig, progress)
+    done += centripetal_pulses(rig, p, 0.5 * p.width_m * p.tall_width_factor,
+                               len(lay.stone_library_index), progress)
+    done += settle(rig, p, progress)
     b = sim.balls
     ids = rig.stone_balls()
     sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.depth_m])
-    remove_debris(rig)
+    remove_debris(rig, p.min_fragment_balls)
     # plate: a row of overlapping pebbles (radius = half the thickness, spacing = radius)
     rp = 0.5 * p.plate_thickness_m
     n = max(2, int(round((p.plate_width_m - 2 * rp) / rp)) + 1)
@@ -240,7 +95,7 @@ def tamp(rig, progress=None):
                                   material_id=STEEL, mass=m, inertia=inertia))
     lay.plate_balls = list(range(n0, len(sim.balls)))
     sim.set_clump_velocity(lay.plate, vel=(0.0, 0.0), omega=0.0, held=True)
-    return done + pulses * per
+    return done
 
 
 def move_side_walls(rig, progress=None):
@@ -252,7 +107,7 @@ def move_side_walls(rig, progress=None):
     w2 = 0.5 * p.width_m
     out = (b.pos[ids, 0] - b.rad[ids] < -w2) | (b.pos[ids, 0] + b.rad[ids] > w2)
     sim.delete_balls(ids[out])
-    remove_debris(rig)
+    remove_debris(rig, p.min_fragment_balls)
     steps = 0
     for _ in range(200):
         xl = sim.walls.seg[lay.left[0], 0]
@@ -350,9 +205,11 @@ def assemble(lib, params, seed, progress=None):
     rig = build_tall(lib, params, seed)
     st = rig.layout.stage_steps
     mu = lib.materials[0]["lc"].mu
-    st["drop"] = assembly_conditions(rig, mu, on=True) + drop(rig, progress)
+    n_stones = len(rig.layout.stone_library_index)
+    st["drop"] = (deposition_conditions(rig, params, mu, on=True)
+                  + drop(rig, params, n_stones, progress))
     st["tamping"] = tamp(rig, progress)
-    assembly_conditions(rig, mu, on=False)
+    deposition_conditions(rig, params, mu, on=False)
     st["reset"] = move_side_walls(rig, progress)
     st["plate"] = settle_plate(rig, progress)
     add_loading_ball(rig)

@@ -143,7 +143,7 @@ class LoadingRun:
     # --------------------------------------------------------------- events
     def advance(self, max_steps=None):
         """Run the engine until a controller's event (or ``max_steps``), then react."""
-        p, s, sim, c = self.rig.params, self.s, self.rig.sim, self.control
+        p, sim, c = self.rig.params, self.rig.sim, self.control
         n = max_steps or (c.capacity - 1) * p.control_every
         sim.run(n, control=c)
         self._book_samples(c.drain())

@@ -68,10 +68,9 @@ def write_vtk(rig, folder, tag):
     intact = sim.intact_bonds()
     allint = bd.state.min(axis=1) == 1
     state = np.where(allint, 0, 3)
-    lg = sim.log
-    n = int(lg.n[0])
+    br = sim.breakages()
     mode_of = np.zeros(len(bd), np.int64)
-    mode_of[lg.bond[:n]] = lg.mode[:n]
+    mode_of[br["bond"]] = np.where(br["mode"] == "tension", 1, 2)
     state = np.where(~intact, mode_of, state)
     keep = (b.alive[bd.i] == 1) & (b.alive[bd.j] == 1)
     idx = {int(v): k for k, v in enumerate(live)}

@@ -1,0 +1,195 @@
+"""Stone placement and deposition, for any container (thesis 4.2.2 a-b): stones drawn from
+a BPM library, placed on shelves without interpenetration, dropped under a high gravity
+with strengthened bonds, settled, gravity ramped, debris removed.
+
+Everything here works on a ``specimen``: an object with ``sim`` (the Simulation),
+``stone_balls()`` (ids of live stone balls) and ``fragments()`` (fragment id per stone
+ball); the stone balls are balls 0..n-1, stone ids 0..k-1. A rig adds its container
+(walls, plates) around them; nothing here knows about it.
+"""
+import numpy as np
+
+from ..dem import ContactMaterial, Simulation
+
+
+def choose_stones(lib, area, rng):
+    """Library indices drawn with replacement until their ball area reaches ``area``."""
+    picks, total = [], 0.0
+    while total < area:
+        k = int(rng.integers(len(lib)))
+        picks.append(k)
+        total += lib.stone(k).area
+        if len(picks) > 100000:
+            raise ValueError("library stones are too small for the container")
+    return picks
+
+
+def shelf_centres(stones, x_min, x_max, gap_factor, rng):
+    """Shelf packing: stones left to right in rows from y = 0, each in a disk of its extent
+    times ``gap_factor`` (no interpenetration); every row starts at a random offset so no
+    columns form. Returns the centres and the top of the highest row."""
+    centres, x, y, row_h = [], None, 0.0, 0.0
+    for s in stones:
+        e = gap_factor * s.extent
+        if x is None or x + 2 * e > x_max:
+            y += row_h
+            x = x_min + rng.uniform(0.0, 0.5) * e
+            row_h = 0.0
+        centres.append((x + e, y + e))
+        x += 2 * e
+        row_h = max(row_h, 2 * e)
+    return centres, y + row_h
+
+
+def new_simulation(lib, params, domain, contact_damping):
+    """The engine for a specimen of ``lib``'s stones: drop gravity and damping, Table 4.2's
+    contact (with the dashpot ratio ``contact_damping``) for every material pair."""
+    p = params
+    sim = Simulation(thickness=lib.thickness, gravity=(0.0, -p.drop_gravity_m_s2),
+                     damping=p.drop_damping, dt_safety=p.dt_safety, domain=domain)
+    lc = lib.materials[0]["lc"]
+    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=lc.mu,
+                                             beta_n=contact_damping, beta_s=contact_damping))
+    return sim
+
+
+def place_stones(sim, lib, stones, centres, rng):
+    """Each stone at its centre with a random rotation; stone ids 0..k-1, balls appended
+    in stone order. Returns the library's bond count of the stones."""
+    n_bonds = 0
+    for k, s in enumerate(stones):
+        cx, cy = centres[k]
+        a = rng.uniform(0, 2 * np.pi)
+        ca, sa = np.cos(a), np.sin(a)
+        x = cx + ca * s.x - sa * s.y
+        y = cy + sa * s.x + ca * s.y
+        rho = lib.materials[s.material]["density"]
+        sim.add_balls(x, y, s.r, rho, stone_id=k, material_id=s.material)
+        n_bonds += len(s.bond_i)
+    return n_bonds
+
+
+def deposition_conditions(specimen, params, mu, on):
+    """While dropping and compacting (``on``): friction ``assembly_friction`` for every
+    contact (a dense specimen; None keeps Table 4.2's) and density scaling at
+    ``assembly_dt_factor`` (only the packing at rest matters there). Off: friction ``mu``
+    (Table 4.2) and the real masses. Returns the steps run (one: the first neighbour build
+    gives dt_crit)."""
+    p, sim = params, specimen.sim
+    if not on:
+        sim.set_contact_coefficient("mu", mu)
+        sim.set_density_scaling(None)
+        return 0
+    if p.assembly_friction is not None:
+        sim.set_contact_coefficient("mu", p.assembly_friction)
+    if p.assembly_dt_factor <= 1.0:
+        return 0
+    sim.run(1)
+    sim.set_density_scaling(p.assembly_dt_factor * sim.dt)
+    return 1
+
+
+def ramp_gravity(specimen, g_from, g_to, steps, progress=None):
+    """Change gravity geometrically in 20 stages over ``steps`` (damped): an abrupt drop
+    from 1000 m/s^2 would release the pile's elastic energy and throw the stones up."""
+    sim = specimen.sim
+    n = max(1, steps // 20)
+    for g in np.geomspace(g_from, g_to, 20):
+        sim.set_gravity((0.0, -float(g)))
+        sim.run(n)
+        if progress is not None:
+            progress(n)
+    return 20 * n
+
+
+def settle(specimen, params, progress=None):
+    """Run until the mean speed of the stone balls is below ``settle_speed_m_s`` (checked
+    every ``settle_check_every`` steps, at most ``settle_max_steps``): a pile that is in
+    equilibrium at a high gravity stays so when the gravity is lowered, while one that
+    is still moving would take very long to settle at 9.81 m/s^2 (local damping)."""
+    p, sim = params, specimen.sim
+    steps = 0
+    while steps < p.settle_max_steps:
+        sim.run(p.settle_check_every)
+        steps += p.settle_check_every
+        if progress is not None:
+            progress(p.settle_check_every)
+        ids = specimen.stone_balls()
+        if np.mean(np.hypot(*sim.balls.vel[ids].T)) < p.settle_speed_m_s:
+            break
+    return steps
+
+
+def remove_debris(specimen, min_balls):
+    """Delete fragments of fewer than ``min_balls`` balls that cuts made out of larger
+    stones (loose single balls would rattle in the voids for a long time)."""
+    if min_balls <= 1:
+        return 0
+    sim = specimen.sim
+    ids = specimen.stone_balls()
+    frag = specimen.fragments()
+    size = np.bincount(frag[ids])
+    stone_size = np.bincount(sim.balls.stone[ids])
+    small = size[frag[ids]] < min_balls
+    cut = stone_size[sim.balls.stone[ids]] > size[frag[ids]]     # the stone lost balls
+    gone = ids[small & cut]
+    sim.delete_balls(gone)
+    return len(gone)
+
+
+def stone_means(specimen, values, n_stones):
+    """Per-stone mean of a per-ball quantity over live stone balls (and ball counts)."""
+    b = specimen.sim.balls
+    ids = specimen.stone_balls()
+    st = b.stone[ids]
+    n = np.bincount(st, minlength=n_stones)
+    s = np.bincount(st, weights=values[ids], minlength=len(n))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return s / n, n
+
+
+def drop(specimen, params, n_stones, progress=None):
+    """Free fall under the drop gravity with bonds strengthened by ``drop_bond_factor``
+    until the highest stone's mean vertical velocity turns upward (or stops), then settle.
+    Returns the steps run."""
+    p, sim = params, specimen.sim
+    sim.scale_bond_strength(p.drop_bond_factor)
+    state = {"fell": False, "steps": 0}
+
+    def watch(s):
+        b = s.balls
+        ymean, n = stone_means(specimen, b.pos[:, 1], n_stones)
+        vmean, _ = stone_means(specimen, b.vel[:, 1], n_stones)
+        top = int(np.nanargmax(np.where(n > 0, ymean, -np.inf)))
+        v = vmean[top]
+        state["steps"] += p.drop_check_every
+        if progress is not None:
+            progress(p.drop_check_every)
+        if v < -1e-3:
+            state["fell"] = True
+        return state["fell"] and v >= 0.0
+
+    sim.run(p.drop_max_steps, callback=watch, every=p.drop_check_every)
+    return state["steps"] + settle(specimen, p, progress)
+
+
+def centripetal_pulses(specimen, params, half_width, n_stones, progress=None):
+    """Compaction like tamping: every stone gets a velocity towards the axis x = 0
+    (rigidly, so bonds are not torn) growing with its distance up to
+    ``tamping_velocity_m_s`` at ``half_width``, ``tamping_pulses`` times over
+    ``tamping_steps``. Returns the steps run."""
+    p, sim = params, specimen.sim
+    pulses = max(1, p.tamping_pulses)
+    per = max(1, p.tamping_steps // pulses)
+    for _ in range(pulses):
+        ids = specimen.stone_balls()
+        xm, _ = stone_means(specimen, sim.balls.pos[:, 0], n_stones)
+        v = -p.tamping_velocity_m_s * np.clip(xm / half_width, -1, 1)
+        st = sim.balls.stone[ids]
+        vel = sim.balls.vel[ids].copy()
+        vel[:, 0] = v[st]
+        sim.set_ball_velocity(ids, vel=vel)
+        sim.run(per)
+        if progress is not None:
+            progress(per)
+    return pulses * per
