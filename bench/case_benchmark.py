@@ -2,17 +2,24 @@
 
     NUMBA_NUM_THREADS=1 python bench/case_benchmark.py [--cycles 50] [--r0 0.0025]
         [--config config/config.yaml] [--library BPM.nc] [--dt-factor F]
+        [--reference /path/to/old/checkout] [--settle2d]
 
 Uses the BPM library given, else builds the box_test database's forms and BPM library with
 the config (cached in results/bench_cache; a few minutes once), or with --synthetic a
 synthetic library in the bpm format (ball radius r0, stones 22.4-63 mm); the rig
 parameters are the config's. Prints assembly and static
 loading times separately, then time per cycle, balls, bonds, steps per cycle and, LAST,
-``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase. Never a test."""
+``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase. With ``--settle2d`` it
+also runs the settle2d problem (bench/engine_vs_lammps.py) at the case's ball count and
+prints both ball-step rates; with ``--reference SRC`` it first runs SRC's own copy of this
+benchmark with SRC's package (a clean checkout of the revision to compare with), so both
+are measured in one invocation on the same machine state. Never a test."""
 import argparse
 import os
+import subprocess
 import sys
 import time
+from pathlib import Path
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
@@ -41,7 +48,11 @@ def main(argv=None):
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--dt-factor", type=float, help="override rig.loading_dt_factor (density scaling)")
+    ap.add_argument("--reference", help="checkout whose own case_benchmark runs first")
+    ap.add_argument("--settle2d", action="store_true", help="settle2d at the same N too")
     a = ap.parse_args(argv)
+    if a.reference:
+        reference(a.reference, argv if argv is not None else sys.argv[1:])
     from ballaststudy.config import load_config
     from ballaststudy.rig.assembly import assemble
     from ballaststudy.rig.library import Library, load_library, synthetic_library
@@ -82,10 +93,39 @@ def main(argv=None):
     t_cyc = time.perf_counter() - t2
     steps = rig.sim.step - s2
     per = t_cyc / a.cycles
+    n_live = int((rig.sim.balls.alive == 1).sum())
+    rate = n_live * steps / t_cyc
     print(f"cycles={a.cycles} time_per_cycle_s={per:.3f} steps_per_cycle={steps / a.cycles:.0f} "
           f"time_per_step_us={t_cyc / steps * 1e6:.1f}")
+    print(f"case: {n_live} balls, ball_steps_per_s={rate:.3g}")
+    if a.settle2d:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from engine_vs_lammps import run_ours
+        r = run_ours(n_live, 20000)
+        print(f"settle2d: {n_live} balls, ball_steps_per_s={r['bsps']:.3g}; "
+              f"case / settle2d = {rate / r['bsps']:.2f}")
     print(f"minutes_per_1000_cycles={per * 1000 / 60:.2f}")
     return 0
+
+
+def reference(src, argv):
+    """Run SRC's own bench/case_benchmark.py with SRC's package (same arguments, minus the
+    options it may not know), its output prefixed."""
+    args, skip = [], False
+    for x in argv:
+        if skip:
+            skip = False
+        elif x == "--reference":
+            skip = True
+        elif not x.startswith(("--reference=", "--settle2d")):
+            args.append(x)
+    env = dict(os.environ, PYTHONPATH=str(Path(src).resolve() / "src"), NUMBA_NUM_THREADS="1")
+    script = Path(src).resolve() / "bench" / "case_benchmark.py"
+    out = subprocess.run([sys.executable, str(script)] + args, env=env, text=True,
+                         capture_output=True, cwd=Path(__file__).resolve().parent.parent)
+    for line in (out.stdout + out.stderr).splitlines():
+        print(f"reference {src}: {line}")
+    print(flush=True)
 
 
 if __name__ == "__main__":

@@ -95,13 +95,15 @@ def load_config(path):
 
 def check_domain(cfg, file):
     """Checks across keys that a schema cannot state; ConfigError naming key and range."""
-    rig = cfg.get("rig") or {}
-    lo, hi = rig.get("cyclic_min_kN"), rig.get("cyclic_max_kN")
+    loading = ((cfg.get("rig") or {}).get("box") or {}).get("loading") or {}
+    key = "rig.box.loading."
+    lo, hi = loading.get("cyclic_min_kN"), loading.get("cyclic_max_kN")
     if lo is not None and hi is not None and not lo < hi:
-        raise ConfigError(file, "rig.cyclic_min_kN", f"{lo:g} kN must be below rig.cyclic_max_kN ({hi:g} kN)")
-    loads = rig.get("static_loads_kN") or []
+        raise ConfigError(file, key + "cyclic_min_kN",
+                          f"{lo:g} kN must be below {key}cyclic_max_kN ({hi:g} kN)")
+    loads = loading.get("static_loads_kN") or []
     if any(b <= a for a, b in zip(loads, loads[1:])):
-        raise ConfigError(file, "rig.static_loads_kN", f"{loads} must increase step by step")
+        raise ConfigError(file, key + "static_loads_kN", f"{loads} must increase step by step")
     bpm = cfg.get("bpm") or {}
     rmin, rmax = bpm.get("radius_min_mm"), bpm.get("radius_max_mm")
     if rmin is not None and rmax is not None and not rmin <= rmax:

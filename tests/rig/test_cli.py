@@ -7,6 +7,7 @@ import xarray as xr
 import yaml
 
 from ballaststudy.cli import main
+from ballaststudy.rig.params import RigParams
 
 from .conftest import SMALL
 
@@ -17,7 +18,8 @@ ROOT = Path(__file__).resolve().parents[2]
 def small_config(tmp_path):
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"].update(SMALL)
+    for stage, keys in RigParams(**SMALL).to_config()["box"].items():
+        cfg["rig"]["box"][stage].update({k: keys[k] for k in SMALL if k in keys})
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(cfg))
     return path

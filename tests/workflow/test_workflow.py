@@ -39,7 +39,7 @@ def study(tmp_path_factory):
     (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["study"]["cases_per_database"] = 1
-    cfg["rig"]["cycles"] = 2
+    cfg["rig"]["box"]["loading"]["cycles"] = 2
     (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
     _snakemake(d, "forms_report")
     return d
@@ -60,6 +60,10 @@ def test_whole_chain_is_planned(study):
     jobs = _jobs(_snakemake(study, "-n"))
     assert jobs == {"bpm_build": 2, "case_assemble": 2, "case_run": 2, "study_aggregate": 1,
                     "study_iri": 1, "study_optimise": 1, "all": 1}, jobs
+
+
+def _loading(cfg):
+    return cfg["rig"]["box"]["loading"]
 
 
 @contextlib.contextmanager
@@ -91,9 +95,12 @@ def test_editing_form_settings_reruns_every_database(study):
 
 @pytest.mark.parametrize("file, change, key", [
     ("databases.yaml", lambda d: d["databases"]["G_1-5"].update(mass_kg=-1), "databases.G_1-5.mass_kg"),
-    ("config.yaml", lambda c: c["rig"].update(cycles=-5), "rig.cycles"),
+    ("config.yaml", lambda c: _loading(c).update(cycles=-5), "rig.box.loading.cycles"),
     ("config.yaml", lambda c: c.update(databases=["G_9-9"]), "databases"),
-    ("config.yaml", lambda c: c["rig"].update(cyclic_min_kN=50.0), "rig.cyclic_min_kN"),
+    ("config.yaml", lambda c: _loading(c).update(cyclic_min_kN=50.0),
+     "rig.box.loading.cyclic_min_kN"),
+    ("config.yaml", lambda c: c["rig"]["box"]["assembly"].update(cycles=5),
+     "rig.box.assembly"),
 ])
 def test_bad_config_is_rejected_before_any_job(study, file, change, key):
     with _edited(study / "config" / file, change):
@@ -118,16 +125,16 @@ def test_whole_chain_runs_and_reruns_only_what_changed(tmp_path):
     (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["study"]["cases_per_database"] = 1
-    cfg["rig"]["cycles"] = 2
+    cfg["rig"]["box"]["loading"]["cycles"] = 2
     (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
     _snakemake(d)
     for out in ("results/study.nc", "results/study/iri/iri.csv", "results/study/report/report.md"):
         assert (d / out).is_file(), out
     assert "Nothing to be done" in _snakemake(d, "-n")
-    with _edited(d / "config" / "config.yaml", lambda c: c["rig"].update(cyclic_max_kN=40.0)):
+    with _edited(d / "config" / "config.yaml", lambda c: _loading(c).update(cyclic_max_kN=40.0)):
         jobs = _jobs(_snakemake(d, "-n"))
     assert "case_assemble" not in jobs and jobs.get("case_run") == 1, jobs
     assert jobs.get("study_aggregate") == 1, jobs
-    with _edited(d / "config" / "config.yaml", lambda c: c["rig"].update(plate_width_m=0.28)):
+    with _edited(d / "config" / "config.yaml", lambda c: c["rig"]["box"]["assembly"].update(plate_width_m=0.28)):
         jobs = _jobs(_snakemake(d, "-n"))
     assert jobs.get("case_assemble") == 1 and jobs.get("case_run") == 1 and "bpm_build" not in jobs, jobs

@@ -1,20 +1,17 @@
 # Stage 3: box-test cases (thesis 4.2.2, 4.2.3): one assembly and one loading run per
 # (database, case). Inputs: the bpm stage's library results/bpm/{db}.nc.
-# Config: rig (assembly and loading parameters), rig.cycles; cases per database:
-# study.cases_per_database (default 10, as in the thesis).
+# Config: rig.box.assembly and rig.box.loading (each stage reruns when its section is
+# edited); cases per database: study.cases_per_database (default 10, as in the thesis).
 import json
 
+from ballaststudy.rig.params import RigParams
+
 CASES = list(range(int(config.get("study", {}).get("cases_per_database", 10))))
-# rig keys that only the loading stage reads: editing them reruns the case runs, not the assembly
-LOADING_KEYS = ("static_", "servo_", "cyclic_", "settlement_force_kN", "cycles", "control_every",
-                "loading_dt_factor", "checkpoint_every", "snapshot_every", "timeseries_every",
-                "vtk_cycles", "max_cycle_steps")
 
 
-def rig_params(loading):
-    """JSON of the assembly (loading=False) or loading (True) part of config['rig']."""
-    rig = config.get("rig", {})
-    return json.dumps({k: v for k, v in rig.items() if k.startswith(LOADING_KEYS) == loading}, sort_keys=True)
+def box_stage(stage):
+    """JSON of the config's rig.box.<stage> section (the rerun trigger of that stage)."""
+    return json.dumps((config.get("rig", {}).get("box") or {}).get(stage) or {}, sort_keys=True)
 
 
 rule case_assemble:
@@ -23,7 +20,7 @@ rule case_assemble:
     output:
         f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
     params:
-        rig=rig_params(loading=False),   # editing an assembly key: reassemble
+        assembly=box_stage("assembly"),   # editing the assembly section: reassemble
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/cases/{{db}}/case{{case}}_assemble.log",
@@ -40,9 +37,9 @@ rule case_run:
         case_png=f"{RESULTS}/cases/{{db}}/case{{case}}/case.png",
         curves=f"{RESULTS}/cases/{{db}}/case{{case}}/behaviours.png",
     params:
-        loading=rig_params(loading=True),   # editing a loading or metrics key: rerun the loading
+        loading=box_stage("loading"),   # editing the loading or metrics section: rerun the loading
         metrics=json.dumps(config.get("metrics", {}), sort_keys=True),
-        cycles=config.get("rig", {}).get("cycles", 1000),
+        cycles=RigParams.from_config(config.get("rig")).cycles,
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/cases/{{db}}/case{{case}}_run.log",

@@ -1,7 +1,9 @@
-"""Rig parameters: the ``rig:`` section of the config, with the thesis' numbers where it
-gives them (4.1, 4.2.2, 4.2.3) and defended choices where it does not (see
-config/thesis.yaml for the reason of each; the defaults here are its values, checked by
-tests/workflow/test_param_defaults.py). Units are SI unless the key names one."""
+"""Box-rig parameters: the ``rig: box:`` section of the config, by stage (``assembly``:
+4.2.2, ``loading``: 4.2.3), with the thesis' numbers where it gives them (4.1, 4.2.2,
+4.2.3) and defended choices where it does not (see config/thesis.yaml for the reason of
+each; the defaults here are its values, checked by tests/workflow/test_param_defaults.py).
+Units are SI unless the key names one. The rig code reads them flat (``params.width_m``);
+the stage a key belongs to decides what reruns when it is edited (workflow/rules/cases.smk)."""
 from dataclasses import asdict, dataclass, field, fields
 
 from ..config import job_seed
@@ -73,13 +75,31 @@ class RigParams:
     max_cycle_steps: int = 5000000
 
     @classmethod
-    def from_config(cls, section):
-        """From the validated ``rig:`` dict (unknown keys are the schema's business)."""
+    def from_config(cls, rig):
+        """From the validated ``rig:`` dict: its box's stages merged (unknown keys are the
+        schema's business)."""
+        box = (rig or {}).get("box") or {}
+        merged = {**(box.get("assembly") or {}), **(box.get("loading") or {})}
         names = {f.name for f in fields(cls)}
-        return cls(**{k: v for k, v in (section or {}).items() if k in names})
+        return cls(**{k: v for k, v in merged.items() if k in names})
 
     def to_dict(self):
         return asdict(self)
+
+    def to_config(self):
+        """The ``rig:`` dict these parameters come from (by stage)."""
+        d = self.to_dict()
+        return {"box": {"assembly": {k: v for k, v in d.items() if k not in LOADING_KEYS},
+                        "loading": {k: v for k, v in d.items() if k in LOADING_KEYS}}}
+
+
+# the keys of the loading stage (4.2.3); all others belong to the assembly (4.2.2)
+LOADING_KEYS = frozenset((
+    "static_loads_kN", "static_window_steps", "static_tolerance", "static_max_windows",
+    "servo_velocity_m_s", "servo_gain_m_s_per_kN", "servo_integral_steps", "cyclic_min_kN",
+    "cyclic_max_kN", "cyclic_v_max_m_s", "cyclic_v_min_m_s", "cyclic_braking_fraction",
+    "settlement_force_kN", "cycles", "control_every", "loading_dt_factor", "checkpoint_every",
+    "snapshot_every", "timeseries_every", "vtk_cycles", "max_cycle_steps"))
 
 
 def case_seed(study_seed, database, case):
