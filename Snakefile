@@ -1,6 +1,8 @@
 # ballaststudy: the whole chain on one command (`snakemake --cores 2`).
 # Thin rules: every rule calls one `ballaststudy` subcommand; the logic is in the package.
 # Config: config/config.yaml (or --configfile), validated by workflow/schemas/ at start.
+import sys
+
 from snakemake.utils import min_version, validate
 
 from ballaststudy.config import check_domain, database_seed, validate as validate_file, form_params, load_databases, select_databases
@@ -25,6 +27,7 @@ include: "workflow/rules/forms.smk"
 include: "workflow/rules/bpm.smk"
 include: "workflow/rules/cases.smk"
 include: "workflow/rules/study.smk"
+include: "workflow/rules/measured.smk"
 
 
 rule all:
@@ -32,3 +35,4 @@ rule all:
         rules.forms_report.output,
         rules.study_iri.output,
         rules.study_optimise.output,
+        rules.measured_all.input if MEASURED_AVAILABLE else [],

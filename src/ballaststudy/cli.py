@@ -15,6 +15,7 @@ from .forms.generator import GenerationError
 from .forms.objective import ObjectiveError
 from .forms.validate import SUMMARY_COLUMNS, validation_row
 from .bpm.cli import register as register_bpm
+from .measured.cli import register as register_measured
 from .rig.cli import register as register_case
 from .study.cli import register as register_study
 
@@ -142,6 +143,7 @@ def build_parser():
     register_bpm(sub)
     register_case(sub)
     register_study(sub)
+    register_measured(sub)
 
     c = sub.add_parser("config", help="configuration")
     cs = c.add_subparsers(dest="action", required=True)

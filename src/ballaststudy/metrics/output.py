@@ -31,18 +31,25 @@ VARIABLES = {
     "ghost_particles": ("1", "number of ghost particles (coordination number <= 2, container and shoulder excluded)", "i8"),
     "excluded_container": ("1", "fragments touching the container (excluded from ghost particles)", "i8"),
     "excluded_shoulder": ("1", "fragments in the shoulder area (excluded from ghost particles)", "i8"),
+    # triaxial / biaxial tests (measured and simulated)
+    "axial_strain": ("1", "permanent axial strain since the start of cyclic loading, compression positive", "f8"),
+    "volumetric_strain": ("1", "permanent volumetric strain since the start of cyclic loading, compression positive (2D: area strain)", "f8"),
 }
 
 
 def metrics_dataset(rows, attrs=None):
     """Dataset with dimension ``cycle`` from a list of ``compute_cycle`` results (cycle k =
-    rows[k]). Unknown keys raise; missing ones are filled with NaN / -1."""
+    rows[k]); the variables the rows give (one table for every rig). Unknown keys raise;
+    a cycle that lacks one is filled with NaN / -1."""
     n = len(rows)
-    unknown = sorted({k for r in rows for k in r} - set(VARIABLES))
+    given = {k for r in rows for k in r}
+    unknown = sorted(given - set(VARIABLES))
     if unknown:
         raise KeyError(f"no units/long_name for {unknown}; add them to metrics.output.VARIABLES")
     data = {}
     for name, (units, long_name, dtype) in VARIABLES.items():
+        if name not in given:
+            continue
         fill = -1 if dtype == "i8" else np.nan
         v = np.array([r.get(name, fill) for r in rows], dtype=dtype).reshape(n)
         data[name] = xr.Variable("cycle", v, {"units": units, "long_name": long_name})

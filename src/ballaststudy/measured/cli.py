@@ -1,0 +1,34 @@
+"""`ballaststudy measured import`: one measured cyclic test (conditions YAML + curve files)
+to one netCDF. Bad input raises ConfigError (file[:line], key, what is allowed), printed as
+one line with exit code 2; nothing is written then."""
+from pathlib import Path
+
+from ..provenance import Recorder
+from .importer import curve_files, measured_dataset, write_test
+
+
+def _import(args):
+    ds = measured_dataset(args.conditions, args.data_dir)     # every check before any output
+    recorder = Recorder("measured import",
+                        inputs=[args.conditions, *curve_files(args.conditions, args.data_dir)],
+                        params={"data_dir": str(args.data_dir) if args.data_dir else None})
+    write_test(ds, args.out)
+    recorder.finish()
+    recorder.write_beside(args.out)
+    if not args.quiet:
+        print(f"wrote {args.out}: {', '.join(ds.data_vars)} at {ds.sizes['cycle']} cycles")
+
+
+def register(subparsers):
+    """Add the ``measured`` stage."""
+    m = subparsers.add_parser("measured", help="measured cyclic tests in (curves + conditions)")
+    ms = m.add_subparsers(dest="action", required=True)
+    i = ms.add_parser("import", help="one test's curves and conditions -> netCDF")
+    i.add_argument("conditions", metavar="TEST.yaml", type=Path,
+                   help="the test's conditions and curve files (schemas/measured.schema.yaml)")
+    i.add_argument("--out", required=True, type=Path, help="netCDF to write")
+    i.add_argument("--data-dir", type=Path,
+                   help="folder to look up curve files not found beside the YAML")
+    i.add_argument("--quiet", action="store_true")
+    i.set_defaults(func=_import)
+    return m
