@@ -152,6 +152,11 @@ class BoxRig:
         return path
 
     @classmethod
+    def from_parts(cls, engine, layout, params, source="checkpoint"):
+        """From engine checkpoint bytes and the layout / parameter dicts."""
+        return cls(cls.sim_from_bytes(engine, source), RigLayout(**layout), RigParams(**params))
+
+    @classmethod
     def load(cls, path):
         with xr.open_dataset(path) as ds:
             data = np.asarray(ds["engine_checkpoint"].values, np.uint8).tobytes()

@@ -19,14 +19,13 @@ the force the plate exerts on it; Python sees the run at the controllers' events
 2D forces are per thickness t (PFC2D): the thesis applies 10-45 kN to its 2D model
 directly, and so does this rig (a 30 kN load on a t = 1 m slice).
 """
-import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..atomic import atomic_path
-from ..dem.control import PEAK, TROUGH, WINDOW, Control
+from ..dem.control import Control
 from .box import BoxRig
+from .cyclic import CycleState, CyclicRun
 
 KN = 1.0e3
 
@@ -53,29 +52,21 @@ CYCLE_FIELDS = {
 
 
 @dataclass
-class LoadingState:
-    """Where the loading run stands (checkpointed as JSON): the phase, the static target,
-    the cycle being recorded and what the cycle records need from its start and peak."""
-    phase: str = "static"            # static -> unload -> cyclic -> done
+class LoadingState(CycleState):
+    """The box run's state beyond a cycle's: the static target and what the records keep
+    of the static phase and of the cycle's peak."""
     target: int = 0                  # index of the static load being held
     windows: int = 0                 # averaging windows spent on it
-    cycle: int = 0
-    cycle_start_step: int = 0
-    cycle_sample0: int = 0           # first sample of the cycle
-    peak_sample: int = -1            # sample of the upper reversal (-1: not yet)
     peak: dict | None = None         # loading-ball and plate state at the peak
-    log0: int = 0                    # breakage log entries before loading began
-    n_bonds0: int = 0                # bonds intact when loading began
     static_end_step: int = -1
     y_ref: float = float("nan")      # loading-ball height at the end of static loading
     static_mean: list = field(default_factory=list)    # window mean force per static load
     static_walls: list = field(default_factory=list)   # (bottom, side-wall vertical) means
-    rows: list = field(default_factory=list)           # behaviours per cycle
-    metrics_cfg: dict = field(default_factory=dict)
 
 
 # control sensors (samples are rows: step, then these readings)
 FORCE, Y, BOTTOM, SIDE = range(4)
+SERVO, PROFILE = 0, 1       # the controllers' indices in loading_control
 
 
 def loading_control(rig):
@@ -100,12 +91,13 @@ def loading_control(rig):
     return c.build()
 
 
-SERVO, PROFILE = 0, 1       # the controllers' indices in loading_control
-
-
-class LoadingRun:
-    """The loading of one case: the controllers run inside the engine's loop; this class
-    reacts to their events (window complete, peak, trough) and keeps the records."""
+class LoadingRun(CyclicRun):
+    """The box loading: static loads held by the servo, then cycles of the profile; the
+    records of each cycle (CYCLE_FIELDS, bottom and side forces and snapshots at the peak)
+    and its behaviours (ballaststudy.metrics)."""
+    CHANNELS = {"force": FORCE, "y": Y}
+    CYCLE_FIELDS = CYCLE_FIELDS
+    State = LoadingState
 
     def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
                  resumed=False):
@@ -113,22 +105,13 @@ class LoadingRun:
         at the end of every cycle by ``ballaststudy.metrics`` (None = its defaults).
         ``resumed``: the engine comes from a checkpoint, its loading timestep already set."""
         p = rig.params
-        self.rig = rig
-        self.cycles = int(cycles)
-        self.checkpoint = checkpoint
-        self.checkpoint_every = int(checkpoint_every or p.checkpoint_every)
-        self.s = LoadingState(log0=rig.sim.n_breakages, metrics_cfg=dict(metrics or {}),
-                              n_bonds0=int((rig.sim.bonds.active == 1).sum()))
-        self.control = loading_control(rig)
-        self.samples = {k: [] for k in ("step", "cycle", "force", "y")}
-        self.cyc = {k: [] for k in CYCLE_FIELDS}
+        super().__init__(rig, cycles, loading_control(rig), checkpoint,
+                         checkpoint_every or p.checkpoint_every, metrics, p.max_cycle_steps)
         self.bottom = []     # (cycle, segment) at peak
         self.side = []       # (cycle, 2, 2) at peak
         self.snap_cycles, self.snap_pos, self.snap_frag = [], [], []
         self.snap_contacts = []
-        self.hooks = []      # callables(run, cycle) at the end of each cycle (VTK...)
         self._metrics_setup()
-        self._checkpoint_due = False
         if p.loading_dt_factor > 1.0 and not resumed:
             rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
@@ -141,43 +124,15 @@ class LoadingRun:
         self.solid_cache = SolidCache(self.metrics_params.solid_reuse_tolerance)
 
     # --------------------------------------------------------------- events
-    def advance(self, max_steps=None):
-        """Run the engine until a controller's event (or ``max_steps``), then react."""
-        p, sim, c = self.rig.params, self.rig.sim, self.control
-        n = max_steps or (c.capacity - 1) * p.control_every
-        sim.run(n, control=c)
-        self._book_samples(c.drain())
-        event, _ = c.event
-        c.clear_event()
-        if event == WINDOW:
-            self._window()
-        elif event == PEAK:
-            self._peak()
-        elif event == TROUGH:
-            self._trough()
-        self._check_stalled()
-        if self._checkpoint_due:
-            self._checkpoint_due = False
-            self.save_checkpoint(self.checkpoint)
-
-    def _book_samples(self, rows):
-        label = self.s.cycle if self.s.phase == "cyclic" else -1
-        self.samples["step"].extend(int(v) for v in rows[:, 0])
-        self.samples["cycle"].extend([label] * len(rows))
-        self.samples["force"].extend(rows[:, 1 + FORCE].tolist())
-        self.samples["y"].extend(rows[:, 1 + Y].tolist())
-
-    def _check_stalled(self):
-        p, s, sim, c = self.rig.params, self.s, self.rig.sim, self.control
+    def check_stalled(self):
+        p, s, c = self.rig.params, self.s, self.control
         approach = c.get(SERVO, "approach_steps")
         if s.phase == "static" and approach > p.static_max_windows * p.static_window_steps:
             raise RuntimeError(f"the loading ball did not reach the plate within "
                                f"{approach:.0f} steps")
-        if s.phase == "cyclic" and sim.step - s.cycle_start_step > p.max_cycle_steps:
-            raise RuntimeError(f"cycle {s.cycle} did not finish within {p.max_cycle_steps} "
-                               f"steps (force {c.reading(FORCE) / KN:.2f} kN)")
+        super().check_stalled()
 
-    def _window(self):
+    def on_window(self, controller):
         """A static window is complete: next load if its mean is within tolerance."""
         p, s, c = self.rig.params, self.s, self.control
         means = c.window_means()
@@ -202,22 +157,11 @@ class LoadingRun:
                                f"{p.static_max_windows} windows (last mean "
                                f"{means[FORCE] / KN:.3f} kN)")
 
-    def _trough(self):
-        if self.s.phase == "cyclic":
-            self._end_cycle()
-        if self.s.phase != "done":
-            self.s.phase = "cyclic"
-            self._start_cycle()
+    def on_cycle_start(self):
+        self.s.peak = None
 
-    def _start_cycle(self):
-        s = self.s
-        s.cycle_start_step = self.rig.sim.step
-        s.cycle_sample0 = len(self.samples["step"])
-        s.peak_sample, s.peak = -1, None
-
-    def _peak(self):
+    def on_peak(self):
         rig, s = self.rig, self.s
-        s.peak_sample = len(self.samples["step"]) - 1
         px, py, pa = rig.plate_state()
         contacts = rig.sim.contact_list()
         s.peak = dict(y=self.control.reading(Y), px=px, py=py, pa=pa,
@@ -247,47 +191,30 @@ class LoadingRun:
                 return y[k - 1] + w * (y[k] - y[k - 1])
         return float("nan")
 
-    def _end_cycle(self):
+    def cycle_row(self):
         rig, s = self.rig, self.s
         px, py, pa = rig.plate_state()
         pk = s.peak or dict(y=np.nan, px=np.nan, py=np.nan, pa=np.nan, contacts=0)
         modes = rig.sim.breakages()["mode"][s.log0:]
         force = self.samples["force"][s.cycle_sample0:]
-        row = dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
-                   force_max=max(force), force_min=min(force),
-                   y_at_settlement_force=self._settlement_height(),
-                   y_at_peak=pk["y"], y_at_end=self.control.reading(Y),
-                   plate_x_at_peak=pk["px"], plate_y_at_peak=pk["py"],
-                   plate_angle_at_peak=pk["pa"], plate_x=px, plate_y=py, plate_angle=pa,
-                   elements_broken_tension=int(np.sum(modes == "tension")),
-                   elements_broken_shear=int(np.sum(modes == "shear")),
-                   contacts=pk["contacts"])
-        for k, v in row.items():
-            self.cyc[k].append(v)
-        s.rows.append(self.behaviours())
-        self._thin_samples(s.cycle_sample0)
-        for hook in self.hooks:
-            hook(self, s.cycle)
-        s.cycle += 1
-        if s.cycle >= self.cycles:
-            s.phase = "done"
-        if s.cycle % self.checkpoint_every == 0:
-            self.solid_cache.clear()
-        if self.checkpoint and (s.cycle % self.checkpoint_every == 0 or s.phase == "done"):
-            self._checkpoint_due = True     # saved once the next cycle has begun
+        return dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
+                    force_max=max(force), force_min=min(force),
+                    y_at_settlement_force=self._settlement_height(),
+                    y_at_peak=pk["y"], y_at_end=self.control.reading(Y),
+                    plate_x_at_peak=pk["px"], plate_y_at_peak=pk["py"],
+                    plate_angle_at_peak=pk["pa"], plate_x=px, plate_y=py, plate_angle=pa,
+                    elements_broken_tension=int(np.sum(modes == "tension")),
+                    elements_broken_shear=int(np.sum(modes == "shear")),
+                    contacts=pk["contacts"])
 
-    def _thin_samples(self, k0):
+    def _thin_samples(self, k0, every=None):
         """Keep every ``timeseries_every``-th sample of the finished cycle (and its last),
         so a 1000-cycle run stays a few tens of MB; the behaviours saw them all."""
-        k = max(1, int(self.rig.params.timeseries_every))
-        if k == 1:
-            return
-        n = len(self.samples["step"])
-        keep = list(range(k0, n, k))
-        if keep and keep[-1] != n - 1:
-            keep.append(n - 1)
-        for name, v in self.samples.items():
-            v[k0:] = [v[i] for i in keep]
+        super()._thin_samples(k0, max(1, int(self.rig.params.timeseries_every)))
+
+    def on_cycle_end(self):
+        if self.s.cycle % self.checkpoint_every == 0:
+            self.solid_cache.clear()
 
     # --------------------------------------------------------------- behaviours
     def snapshot(self):
@@ -345,24 +272,9 @@ class LoadingRun:
         return {k: (float(v) if isinstance(v, (float, np.floating)) else int(v))
                 for k, v in out.items()}
 
-    # --------------------------------------------------------------- driving
-    def run(self, progress=None, stop_after=None):
-        """Run until ``cycles`` are done (or ``stop_after`` further cycles: an interruption
-        for tests). ``progress(phase, cycle)`` is called after each event or chunk."""
-        s = self.s
-        c0 = s.cycle
-        while s.phase != "done":
-            self.advance()
-            if progress is not None:
-                progress(s.phase, s.cycle)
-            if stop_after is not None and s.cycle - c0 >= stop_after:
-                break
-        return self
-
     # --------------------------------------------------------------- checkpoint
-    def _arrays(self):
-        d = {"samp_" + k: np.asarray(v) for k, v in self.samples.items()}
-        d.update({"cyc_" + k: np.asarray(v, float) for k, v in self.cyc.items()})
+    def _extra_arrays(self):
+        d = {}
         nseg = len(self.rig.layout.bottom)
         d["bottom"] = np.asarray(self.bottom, float).reshape(-1, nseg)
         d["side"] = np.asarray(self.side, float).reshape(-1, 2, 2)
@@ -377,47 +289,20 @@ class LoadingRun:
             d["snap_contact_" + k] = np.concatenate(parts) if parts else np.zeros(0)
         return d
 
-    def save_checkpoint(self, path):
-        """Engine checkpoint + rig layout + loading state + records, one npz, atomic."""
-        data = self._arrays()
-        data["engine"] = np.frombuffer(self.rig.engine_bytes(), np.uint8)
-        data["state"] = np.array(json.dumps(asdict(self.s)))
-        data.update(self.control.to_dict())
-        data["layout"] = np.array(json.dumps(vars(self.rig.layout)))
-        data["params"] = np.array(json.dumps(self.rig.params.to_dict()))
-        data["cycles"] = np.array(self.cycles)
-        with atomic_path(path) as tmp:
-            with open(tmp, "wb") as f:
-                np.savez(f, **data)
+    def _load_extra(self, d):
+        self._metrics_setup()
+        self.bottom = list(d["bottom"])
+        self.side = list(d["side"])
+        self.snap_cycles = d["snap_cycles"].tolist()
+        self.snap_pos = list(d["snap_pos"])
+        self.snap_frag = list(d["snap_frag"])
+        off = np.r_[0, np.cumsum(d["snap_contact_count"])]
+        self.snap_contacts = [{k: d["snap_contact_" + k][a:b]
+                               for k in ("i", "j", "fx", "fy", "x", "y")}
+                              for a, b in zip(off[:-1], off[1:])]
 
     @classmethod
     def from_checkpoint(cls, path, cycles=None, checkpoint_every=None):
         """The run saved in ``path`` (its metrics settings come with it)."""
-        from .box import RigLayout
-        from .params import RigParams
-        with np.load(path, allow_pickle=False) as z:
-            d = {k: z[k] for k in z.files}
-        sim = BoxRig.sim_from_bytes(d["engine"].tobytes(), path)
-        rig = BoxRig(sim, RigLayout(**json.loads(str(d["layout"]))),
-                     RigParams(**json.loads(str(d["params"]))))
-        run = cls(rig, int(d["cycles"]) if cycles is None else cycles, checkpoint=path,
-                  checkpoint_every=checkpoint_every, resumed=True)
-        run.s = LoadingState(**json.loads(str(d["state"])))
-        run.control.load(d)
-        run._metrics_setup()
-        if run.s.phase == "done" and run.s.cycle < run.cycles:
-            run.s.phase = "cyclic"      # more cycles asked for than were run
-            run._start_cycle()
-        for k in run.samples:
-            run.samples[k] = d["samp_" + k].tolist()
-        for k in run.cyc:
-            run.cyc[k] = d["cyc_" + k].tolist()
-        run.bottom = list(d["bottom"])
-        run.side = list(d["side"])
-        run.snap_cycles = d["snap_cycles"].tolist()
-        run.snap_pos = list(d["snap_pos"])
-        run.snap_frag = list(d["snap_frag"])
-        off = np.r_[0, np.cumsum(d["snap_contact_count"])]
-        run.snap_contacts = [{k: d["snap_contact_" + k][a:b] for k in ("i", "j", "fx", "fy", "x", "y")}
-                             for a, b in zip(off[:-1], off[1:])]
-        return run
+        return super().from_checkpoint(path, BoxRig, cycles=cycles,
+                                       checkpoint_every=checkpoint_every)
