@@ -75,7 +75,8 @@ def tamp(rig, progress=None):
     p, sim, lay = rig.params, rig.sim, rig.layout
     done = ramp_gravity(rig, p.drop_gravity_m_s2, p.tamping_gravity_m_s2, p.gravity_ramp_steps,
                         progress)
-    done += centripetal_pulses(rig, p, 0.5 * p.width_m * p.tall_width_factor,
+    done += centripetal_pulses(rig, p.tamping_velocity_m_s, p.tamping_pulses, p.tamping_steps,
+                               0.5 * p.width_m * p.tall_width_factor,
                                len(lay.stone_library_index), progress)
     done += settle(rig, p, progress)
     b = sim.balls

@@ -7,9 +7,35 @@ Everything here works on a ``specimen``: an object with ``sim`` (the Simulation)
 ball); the stone balls are balls 0..n-1, stone ids 0..k-1. A rig adds its container
 (walls, plates) around them; nothing here knows about it.
 """
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..dem import ContactMaterial, Simulation
+
+
+@dataclass
+class DepositionParams:
+    """What the kit's stages read (every rig's assembly section has these keys; the values
+    are config/thesis.yaml's, which says why)."""
+    fill_area_ratio: float = 1.0       # ball area of the drawn stones / the specimen's area
+    placement_gap_factor: float = 1.1  # shelf cell = factor * the stone's extent
+    drop_gravity_m_s2: float = 1000.0
+    assembly_friction: float | None = 0.0    # friction while depositing (None: Table 4.2)
+    assembly_dt_factor: float = 2.0    # density scaling while depositing: dt = factor x dt_crit
+    drop_bond_factor: float = 128.0
+    drop_damping: float = 0.7
+    drop_check_every: int = 50
+    drop_max_steps: int = 400000
+    settle_speed_m_s: float = 0.01
+    settle_check_every: int = 500
+    settle_max_steps: int = 300000
+    gravity_ramp_steps: int = 5000
+    min_fragment_balls: int = 3
+    gravity_m_s2: float = 9.81
+    damping: float = 0.7
+    contact_damping_ratio: float = 0.0
+    dt_safety: float = 0.8
 
 
 def choose_stones(lib, area, rng):
@@ -173,18 +199,18 @@ def drop(specimen, params, n_stones, progress=None):
     return state["steps"] + settle(specimen, p, progress)
 
 
-def centripetal_pulses(specimen, params, half_width, n_stones, progress=None):
+def centripetal_pulses(specimen, velocity, pulses, steps, half_width, n_stones,
+                       progress=None):
     """Compaction like tamping: every stone gets a velocity towards the axis x = 0
-    (rigidly, so bonds are not torn) growing with its distance up to
-    ``tamping_velocity_m_s`` at ``half_width``, ``tamping_pulses`` times over
-    ``tamping_steps``. Returns the steps run."""
-    p, sim = params, specimen.sim
-    pulses = max(1, p.tamping_pulses)
-    per = max(1, p.tamping_steps // pulses)
+    (rigidly, so bonds are not torn) growing with its distance up to ``velocity`` at
+    ``half_width``, ``pulses`` times over ``steps``. Returns the steps run."""
+    sim = specimen.sim
+    pulses = max(1, pulses)
+    per = max(1, steps // pulses)
     for _ in range(pulses):
         ids = specimen.stone_balls()
         xm, _ = stone_means(specimen, sim.balls.pos[:, 0], n_stones)
-        v = -p.tamping_velocity_m_s * np.clip(xm / half_width, -1, 1)
+        v = -velocity * np.clip(xm / half_width, -1, 1)
         st = sim.balls.stone[ids]
         vel = sim.balls.vel[ids].copy()
         vel[:, 0] = v[st]

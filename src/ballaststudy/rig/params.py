@@ -7,10 +7,11 @@ the stage a key belongs to decides what reruns when it is edited (workflow/rules
 from dataclasses import asdict, dataclass, field, fields
 
 from ..config import job_seed
+from .deposition import DepositionParams
 
 
 @dataclass
-class RigParams:
+class RigParams(DepositionParams):
     # container of the box test (thesis 4.1): inner width = cylinder diameter, height
     width_m: float = 0.34
     height_m: float = 0.22
@@ -18,8 +19,6 @@ class RigParams:
     bottom_segments: int = 20          # 4.2.2 d
     # not in the thesis
     tall_width_factor: float = 1.25    # tall container width / width during drop + tamping
-    fill_area_ratio: float = 1.0       # ball area of the drawn stones / (width * depth)
-    placement_gap_factor: float = 1.1  # cell size = factor * largest stone diameter
     plate_width_m: float = 0.30
     plate_thickness_m: float = 0.02
     plate_density_kg_m3: float = 7850.0
@@ -27,30 +26,14 @@ class RigParams:
     loading_ball_density_kg_m3: float = 7850.0
     loading_contact_E_Pa: float = 5.0e8
     loading_contact_damping_ratio: float = 0.0
-    drop_gravity_m_s2: float = 1000.0  # 4.2.2 b
-    assembly_friction: float | None = 0.0    # stone friction while dropping/tamping (None: Table 4.2)
-    assembly_dt_factor: float = 2.0    # density scaling while dropping/tamping: dt = factor x dt_crit
-    drop_bond_factor: float = 128.0
-    drop_damping: float = 0.7
-    drop_check_every: int = 50
-    drop_max_steps: int = 400000
     tamping_velocity_m_s: float = 1.0
     tamping_gravity_m_s2: float = 1000.0
-    gravity_ramp_steps: int = 5000
     tamping_pulses: int = 4
-    min_fragment_balls: int = 3
-    settle_speed_m_s: float = 0.01
-    settle_check_every: int = 500
-    settle_max_steps: int = 300000
     tamping_steps: int = 20000
     wall_speed_m_s: float = 5.0
     plate_approach_gap_m: float = 2.0e-4
     plate_settle_velocity_m_s: float = 0.01
     relax_steps: int = 10000           # 4.2.2 d
-    gravity_m_s2: float = 9.81
-    damping: float = 0.7
-    contact_damping_ratio: float = 0.0
-    dt_safety: float = 0.8
     # loading (4.2.3)
     static_loads_kN: list = field(default_factory=lambda: [10.0, 20.0, 30.0])
     static_window_steps: int = 10000
