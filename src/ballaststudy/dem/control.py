@@ -14,13 +14,16 @@ Sensors (reading = ``scale`` x quantity):
   CLUMP_REACTION  force of the contacts on a clump along an axis (net force minus weight)
   CLUMP_POSITION  a clump's centre along an axis
   WALL_FORCE      summed force of the balls on a set of wall segments along an axis
+  WALL_POSITION   mean coordinate of a set of wall segments' end points along an axis
 Actuators: HELD_CLUMP (velocity along the axis, other components and spin held at zero),
 WALLS (velocity of a set of segments along the axis).
 Controllers:
   SERVO   PI force servo, v = -clip(gain (target - f) + I, +-v_max); I integrates
           gain (target - f) every / integral_steps, clipped at +-v_max (no wind-up). It
           first approaches (v_max towards the target) until the reading reaches ``touch``;
-          from then on it averages every sensor over windows of ``window_steps``.
+          from then on it averages every sensor over windows of ``window_steps``. A positive
+          gain moves the actuator towards -axis to raise the reading, a negative one
+          towards +axis.
   CYCLIC  bound-to-bound profile: moves with sign ``direction`` at v_max until the reading
           is within ``brake`` x (hi - lo) of the bound it approaches, then linearly down
           to v_min at the bound; reverses at hi (event PEAK) and at lo (event TROUGH).
@@ -40,7 +43,7 @@ from .jit import NO_NRT
 EVERY, COUNT, PENDING, EVENT, EVENT_CONTROLLER, NSAMP, WINDOW_N = range(7)
 NCFG = 7
 # sensor kinds, actuator kinds, controller kinds
-CLUMP_REACTION, CLUMP_POSITION, WALL_FORCE = 0, 1, 2
+CLUMP_REACTION, CLUMP_POSITION, WALL_FORCE, WALL_POSITION = 0, 1, 2, 3
 HELD_CLUMP, WALLS = 0, 1
 SERVO, CYCLIC = 1, 2
 # events
@@ -73,25 +76,28 @@ def read_sensors(prm, clumps, walls, c):
             v = clumps.force[a, ax] - clumps.mass[a] * prm[P.GX + ax]
         elif kind == CLUMP_POSITION:
             v = clumps.pos[a, ax]
-        else:
+        elif kind == WALL_FORCE:
             v = 0.0
             for m in range(a, b):
                 v += walls.force[c.members[m], ax]
+        else:
+            v = 0.0
+            for m in range(a, b):
+                v += walls.seg[c.members[m], ax] + walls.seg[c.members[m], 2 + ax]
+            v *= 0.5 / (b - a)
         c.val[s] = c.scale[s] * v
 
 
 @njit(**NO_NRT)
 def _servo_update(c, k):
-    """Approach, then window averaging of every sensor. Returns an event code."""
+    """Approach, then the averaging window (of every sensor: ``window``). Returns an
+    event code."""
     st, par = c.cst[k], c.cpar[k]
     if st[TOUCHED] == 0.0:
         if c.val[c.ctl[k, 1]] < par[TOUCH]:
             st[APPROACH_STEPS] += c.cfg[EVERY]
             return NO_EVENT
         st[TOUCHED] = 1.0
-    for s in range(c.val.shape[0]):
-        c.wsum[s] += c.val[s]
-    c.cfg[WINDOW_N] += 1
     st[WINDOW_DONE] += c.cfg[EVERY]
     return WINDOW if st[WINDOW_DONE] >= par[WINDOW_STEPS] else NO_EVENT
 
@@ -164,13 +170,19 @@ def control_step(prm, step, clumps, walls, c):
         c.samp[n, 1 + s] = c.val[s]
     c.cfg[NSAMP] = n + 1
     event = NO_EVENT
+    windowing = False
     for k in range(c.ctl.shape[0]):
         if c.ctl[k, 3] == 0:
             continue
         e = _servo_update(c, k) if c.ctl[k, 0] == SERVO else _cyclic_update(c, k)
+        windowing = windowing or (c.ctl[k, 0] == SERVO and c.cst[k, TOUCHED] > 0.0)
         if e != NO_EVENT and event == NO_EVENT:
             event = e
             c.cfg[EVENT_CONTROLLER] = k
+    if windowing:                 # one window for all servos: every sensor's sum
+        for s in range(c.val.shape[0]):
+            c.wsum[s] += c.val[s]
+        c.cfg[WINDOW_N] += 1
     if event == NO_EVENT and n + 1 == c.samp.shape[0]:
         event = BUFFER_FULL
     c.cfg[EVENT] = event
@@ -211,6 +223,15 @@ class Control:
         a, b = self._group(segments)
         self._sensors.append(((WALL_FORCE, a, b, int(axis)), float(scale)))
         return len(self._sensors) - 1
+
+    def wall_position(self, segments, axis):
+        a, b = self._group(segments)
+        self._sensors.append(((WALL_POSITION, a, b, int(axis)), 1.0))
+        return len(self._sensors) - 1
+
+    def set_scale(self, sensor, scale):
+        """Change a sensor's factor (a stress sensor's 1 / (length t) as the length changes)."""
+        self.arrays.scale[sensor] = scale
 
     def held_clump(self, clump, axis):
         self._actuators.append((HELD_CLUMP, int(clump), 0, int(axis)))
@@ -291,10 +312,15 @@ class Control:
         """Mean reading of every sensor over the servo window just completed; resets it."""
         a = self.arrays
         means = a.wsum / a.cfg[WINDOW_N]
+        self.reset_window()
+        return means
+
+    def reset_window(self):
+        """Start a new averaging window now."""
+        a = self.arrays
         a.wsum[:] = 0.0
         a.cfg[WINDOW_N] = 0
         a.cst[:, WINDOW_DONE] = 0.0
-        return means
 
     def _slot(self, k, name):
         a = self.arrays

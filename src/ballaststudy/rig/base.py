@@ -18,6 +18,7 @@ class Rig:
     ``Layout`` and ``Params`` (dataclasses) and ``title``."""
     Layout = Params = None
     title = "assembled specimen"
+    kind = ""
 
     def __init__(self, sim, layout, params):
         self.sim = sim
@@ -29,6 +30,14 @@ class Rig:
         b = self.sim.balls
         ids = np.arange(self.layout.n_stone_balls)
         return ids[b.alive[ids] == 1]
+
+    def wall_groups(self):
+        """{name: segment ids} of the walls that bound the specimen (drawn, VTK kinds)."""
+        return {}
+
+    def body_balls(self):
+        """{name: ball ids} of the bodies that are not stones (plates, loading bodies)."""
+        return {}
 
     def fragments(self):
         """Fragment id per stone ball (-1 for dead balls): Simulation.fragments."""
@@ -83,7 +92,7 @@ class Rig:
              "engine_checkpoint": ("nbytes", np.frombuffer(self.engine_bytes(), np.uint8),
                                    {"long_name": "ballaststudy.dem checkpoint (npz bytes)"})},
             attrs={"Conventions": "CF-1.8",
-                   "title": self.title,
+                   "title": self.title, "rig_kind": self.kind,
                    "rig_layout_json": json.dumps(vars(lay)),
                    "rig_params_json": json.dumps(self.params.to_dict()),
                    "database": lay.database, "seed": lay.seed, "step": sim.step,

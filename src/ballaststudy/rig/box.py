@@ -40,6 +40,16 @@ class BoxRig(Rig):
     Layout = RigLayout
     Params = RigParams
     title = "box-test case: assembled specimen (thesis 4.2.2)"
+    kind = "box"
+
+    def wall_groups(self):
+        lay = self.layout
+        return {"bottom": lay.bottom, "left": lay.left, "right": lay.right}
+
+    def body_balls(self):
+        lay = self.layout
+        return {"plate": lay.plate_balls,
+                "loading ball": [lay.loading_ball] if lay.loading_ball >= 0 else []}
 
     # ----------------------------------------------------------------- measurements
     def loading_force(self):

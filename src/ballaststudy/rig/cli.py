@@ -1,4 +1,5 @@
-"""`ballaststudy case ...`: assemble a box-test case from a BPM library and load it.
+"""`ballaststudy case ...`: assemble a case of the configured rig (``rig.kind``: the box
+test or the cyclic biaxial test; ``--rig`` overrides) from a BPM library and load it.
 
     ballaststudy case assemble BPM.nc --case K --out results/cases/DB/caseK/assembled.nc
     ballaststudy case run ASSEMBLED.nc --cycles N --out results/cases/DB/caseK/metrics.nc
@@ -16,15 +17,32 @@ from ..provenance import Recorder
 from .params import RigParams, case_seed
 
 
-def _params(args):
+def _kind(args, cfg):
+    return getattr(args, "rig", None) or cfg["rig"].get("kind", "box")
+
+
+def _params(args, kind=None):
     cfg = load_config(args.config)
+    kind = kind or _kind(args, cfg)
+    if kind == "biaxial":
+        from .biaxial import BiaxialParams
+        return cfg, BiaxialParams.from_config(cfg.get("rig", {}))
     return cfg, RigParams.from_config(cfg.get("rig", {}))
+
+
+def _rig_kind(path):
+    """The rig an assembled file holds (files from before the biaxial rig: the box)."""
+    import xarray as xr
+    with xr.open_dataset(path) as ds:
+        return str(ds.attrs.get("rig_kind", "box"))
 
 
 def _case_assemble(args):
     from .assembly import assemble
+    from .biaxial import assemble_biaxial
     from .library import LibraryError, load_library
     cfg, params = _params(args)
+    assemble = assemble_biaxial if _kind(args, cfg) == "biaxial" else assemble
     try:
         lib = load_library(args.library)
     except LibraryError as err:
@@ -48,31 +66,41 @@ def _case_assemble(args):
               f"steps {lay.stage_steps}")
 
 
-def _case_run(args):
+def _rig_classes(kind):
+    """(Rig class, run class, output writer) of a rig kind."""
+    if kind == "biaxial":
+        from .biaxial import BiaxialRig, BiaxialRun, write_biaxial_outputs
+        return BiaxialRig, BiaxialRun, write_biaxial_outputs
     from .box import BoxRig
     from .loading import LoadingRun
     from .output import write_outputs
+    return BoxRig, LoadingRun, write_outputs
+
+
+def _case_run(args):
     out = Path(args.out)
     ckpt = out.with_name(out.stem + ".checkpoint.npz")
-    cfg, params = _params(args)
+    if not Path(args.assembled).is_file():
+        raise ConfigError(args.assembled, None, "file not found")
+    kind = _rig_kind(args.assembled)
+    rig_class, run_class, write_outputs = _rig_classes(kind)
+    cfg, params = _params(args, kind)
     recorder = Recorder("case run", inputs=(args.assembled, args.config),
                         params={"cycles": args.cycles, "rig": params.to_dict(),
                                 "metrics": cfg.get("metrics")})
     if ckpt.exists() and not args.restart:
-        run = LoadingRun.from_checkpoint(ckpt, cycles=args.cycles,
-                                         checkpoint_every=args.checkpoint_every)
+        run = run_class.from_checkpoint(ckpt, cycles=args.cycles,
+                                        checkpoint_every=args.checkpoint_every)
         if not args.quiet:
             print(f"resuming from {ckpt} (cycle {run.s.cycle}, step {run.rig.sim.step})")
     else:
-        if not Path(args.assembled).is_file():
-            raise ConfigError(args.assembled, None, "file not found")
         try:
-            rig = BoxRig.load(args.assembled)
+            rig = rig_class.load(args.assembled)
         except (ValueError, KeyError, OSError) as err:
             raise ConfigError(args.assembled, None, f"not an assembled case ({err})") from None
         rig.params = params
-        run = LoadingRun(rig, args.cycles, checkpoint=ckpt,
-                         checkpoint_every=args.checkpoint_every, metrics=cfg.get("metrics"))
+        run = run_class(rig, args.cycles, checkpoint=ckpt,
+                        checkpoint_every=args.checkpoint_every, metrics=cfg.get("metrics"))
     vtk_dir = None if args.no_vtk else out.with_name("vtk")
     if vtk_dir is not None:
         from .vtk import vtk_hook
@@ -117,6 +145,7 @@ def register(subparsers):
     a.add_argument("--case", type=int, required=True, help="case number (selects the seed)")
     a.add_argument("--out", required=True, type=Path, help="assembled state (.nc)")
     a.add_argument("--seed", type=int, help="override the seed derived from (study seed, database, case)")
+    a.add_argument("--rig", choices=("box", "biaxial"), help="override the config's rig.kind")
     a.add_argument("--config", default="config/config.yaml", type=Path)
     a.add_argument("--quiet", action="store_true")
     a.set_defaults(func=_case_assemble)

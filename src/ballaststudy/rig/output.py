@@ -17,7 +17,7 @@ def plot_case(rig, path, breakages=None, title=""):
     from matplotlib.collections import LineCollection, PatchCollection
     from matplotlib.patches import Circle
 
-    sim, lay = rig.sim, rig.layout
+    sim = rig.sim
     b = sim.balls
     live = np.nonzero(b.alive == 1)[0]
     colour = {0: "0.15", 1: "0.6", 2: "tab:blue"}
@@ -27,7 +27,8 @@ def plot_case(rig, path, breakages=None, title=""):
                                       edgecolors="none"))
     seg = sim.walls.seg
     keep = np.zeros(len(seg), bool)
-    keep[lay.bottom + lay.left + lay.right] = True
+    for ids in rig.wall_groups().values():
+        keep[ids] = True
     ax.add_collection(LineCollection(seg[keep].reshape(-1, 2, 2), colors="k", linewidths=1.5))
     if breakages is not None and len(breakages["x"]):
         t = breakages["mode_code"] == 1
@@ -54,8 +55,9 @@ def plot_behaviours(ds, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    names = [n for n in ("settlement", "breakage_rate", "breakage_rate_tension",
-                         "breakage_rate_shear", "fpa", "void_ratio", "ghost_particles") if n in ds]
+    names = [n for n in ("settlement", "axial_strain", "volumetric_strain", "breakage_rate",
+                         "breakage_rate_tension", "breakage_rate_shear", "fpa", "void_ratio",
+                         "ghost_particles") if n in ds]
     fig, axes = plt.subplots(len(names), 1, figsize=(6, 1.9 * len(names)), sharex=True, dpi=110)
     axes = np.atleast_1d(axes)
     for ax, n in zip(axes, names):

@@ -94,15 +94,7 @@ def to_dataset(run, attrs=None):
     data["sample_y"] = ("sample", np.asarray(sm["y"]), {"units": "m",
                         "long_name": "loading-ball height"})
     # breakage records
-    br = breakage_records(run)
-    for k, units, ln in (("step", "1", "engine step"), ("cycle", "1", "cycle (-1: static)"),
-                         ("mode_code", "1", "mode"), ("stone", "1", "stone id"),
-                         ("i", "1", "ball i"), ("j", "1", "ball j"), ("x", "m", "x"),
-                         ("y", "m", "y"), ("stress", "Pa", "stress at failure")):
-        a = {"units": units, "long_name": f"breakage: {ln}"}
-        if k == "mode_code":
-            a.update(flag_values=np.array([1, 2], np.int8), flag_meanings="tension shear")
-        data["breakage_" + k] = ("breakage", br[k], a)
+    add_breakage_records(run, data)
     # snapshots (every snapshot_every cycles, at peak load)
     nn = lay.n_stone_balls
     b = rig.sim.balls
@@ -164,4 +156,55 @@ def write_metrics(run, path, attrs=None):
     from ..metrics.output import write_metrics as write
     ds = to_dataset(run, attrs)
     write(path, ds)
+    return ds
+
+
+def add_breakage_records(run, data):
+    """The breakage records as ``breakage_<name>`` variables of ``data``."""
+    br = breakage_records(run)
+    for k, units, ln in BREAKAGE_VARIABLES:
+        a = {"units": units, "long_name": f"breakage: {ln}"}
+        if k == "mode_code":
+            a.update(flag_values=np.array([1, 2], np.int8), flag_meanings="tension shear")
+        data["breakage_" + k] = ("breakage", br[k], a)
+
+
+BREAKAGE_VARIABLES = (("step", "1", "engine step"), ("cycle", "1", "cycle (-1: before cycling)"),
+                      ("mode_code", "1", "mode"), ("stone", "1", "stone id"),
+                      ("i", "1", "ball i"), ("j", "1", "ball j"), ("x", "m", "x"),
+                      ("y", "m", "y"), ("stress", "Pa", "stress at failure"))
+
+
+def cyclic_dataset(run, channel_units, title, attrs=None):
+    """metrics.nc of any cyclic run: its cycle records, its time series (one variable per
+    channel, ``channel_units``: name -> (units, long name)), the breakage records and the
+    behaviours per cycle (ballaststudy.metrics' variable table)."""
+    from ..metrics import metrics_dataset
+    n = len(run.cyc["cycle_end_step"])
+    data = {}
+    for k, (units, long_name) in run.CYCLE_FIELDS.items():
+        v = np.asarray(run.cyc[k], float)
+        data[k] = ("cycle", v.astype(np.int64) if units == "1" else v,
+                   {"units": units, "long_name": long_name})
+    sm = run.samples
+    data["sample_step"] = ("sample", np.asarray(sm["step"], np.int64),
+                           {"units": "1", "long_name": "engine step of the sample"})
+    data["sample_cycle"] = ("sample", np.asarray(sm["cycle"], np.int32),
+                            {"units": "1", "long_name": "cycle of the sample (-1: before cycling)"})
+    for name, (units, long_name) in channel_units.items():
+        data["sample_" + name] = ("sample", np.asarray(sm[name]),
+                                  {"units": units, "long_name": long_name})
+    add_breakage_records(run, data)
+    ds = xr.Dataset(data, coords={"cycle": ("cycle", np.arange(n),
+                                            {"units": "1", "long_name": "loading cycle"})},
+                    attrs={"Conventions": "CF-1.8", "title": title,
+                           "database": run.rig.layout.database, "seed": run.rig.layout.seed,
+                           "cycles_requested": run.cycles,
+                           "thickness_m": run.rig.sim.thickness,
+                           "rig_params_json": json.dumps(run.rig.params.to_dict()),
+                           "rig_layout_json": json.dumps(vars(run.rig.layout)),
+                           **(attrs or {})})
+    if run.s.rows:
+        for name, da in metrics_dataset(run.s.rows).data_vars.items():
+            ds[name] = da
     return ds

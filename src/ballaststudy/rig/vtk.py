@@ -54,10 +54,9 @@ def write_vtk(rig, folder, tag):
     live = np.nonzero(b.alive == 1)[0]
     frag = np.full(len(b), -1)
     frag[: lay.n_stone_balls] = rig.fragments()
-    body = np.zeros(len(b), np.int64)
-    body[lay.plate_balls] = 1
-    if lay.loading_ball >= 0:
-        body[lay.loading_ball] = 2
+    body = np.zeros(len(b), np.int64)          # 0 stones, k: the rig's k-th other body
+    for k, ids in enumerate(rig.body_balls().values(), start=1):
+        body[ids] = k
     pb = _polydata(folder / f"balls_{tag}.vtp", b.pos[live], verts=np.arange(len(live)),
                    point_data=[("radius", b.rad[live], "Float64"),
                                ("stone", b.stone[live], "Int32"),
@@ -79,8 +78,9 @@ def write_vtk(rig, folder, tag):
     pf = _polydata(folder / f"bonds_{tag}.vtp", b.pos[live], lines=lines,
                    cell_data=[("state", state[keep], "Int32")])
     seg = sim.walls.seg
-    kind = np.zeros(len(seg), np.int64)
-    kind[lay.bottom], kind[lay.left], kind[lay.right] = 1, 2, 3
+    kind = np.zeros(len(seg), np.int64)         # 0 other, k: the rig's k-th wall group
+    for k, ids in enumerate(rig.wall_groups().values(), start=1):
+        kind[ids] = k
     pts = seg.reshape(-1, 2)
     pw = _polydata(folder / f"walls_{tag}.vtp", pts, lines=np.arange(len(pts)).reshape(-1, 2),
                    cell_data=[("kind", kind, "Int32"), ("force", sim.walls.force, "Float64")])

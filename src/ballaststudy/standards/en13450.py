@@ -93,7 +93,7 @@ def grading_target(value):
             raise ValueError(f"unknown grading category {value!r}; allowed: "
                              + ", ".join(GRADING_CATEGORIES) + ", or percent passing per sieve")
         ranges = GRADING_CATEGORIES[name]
-        top, bottom = max(ranges), min(ranges)
+        top = max(ranges)
         return tuple(0.5 * sum(ranges[s]) if s in ranges else (100.0 if s > top else 0.0)
                      for s in GRADING_SIEVES_MM)
     if isinstance(value, (list, tuple)):

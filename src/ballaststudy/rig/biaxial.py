@@ -1,0 +1,390 @@
+"""The cyclic biaxial test: the 2D analogue of the cyclic triaxial test on which the public
+measured ballast data are taken (a 300 x 600 mm cylinder under a confining pressure p and
+a cyclic deviator stress q). Built on the kit: deposition.py places and drops the stones,
+dem.control runs the servos inside the engine's loop, cyclic.py keeps the records.
+
+The specimen is a rectangle of bonded stones between a bottom platen, a top platen and two
+side walls (rigid, frictionless: a membrane's confinement without its bulging). Stages:
+1. deposition in a tall box of the specimen's width; balls above the specimen height cut;
+2. isotropic consolidation: three stress servos (left, right, top) hold p until the
+   window means of all three are within ``consolidation_tolerance`` of p;
+3. cyclic loading: the side servos keep p; the top platen drives the axial stress
+   sigma_1 = p + q between p + q_min and p + q_max (quasi-static: the bound-to-bound
+   profile at the configured platen speeds; real-time: not yet built).
+2D stresses are forces per boundary length per thickness t (sigma = F / (L t)); strains are
+compression positive from the end of consolidation: axial 1 - H/H0, volumetric (area)
+1 - W H / (W0 H0), H and W between the walls' faces.
+"""
+from dataclasses import asdict, dataclass, field, fields
+
+import numpy as np
+
+from ..dem.control import Control
+from .base import Rig
+from .cyclic import CycleState, CyclicRun
+from .deposition import (DepositionParams, choose_stones, deposition_conditions, drop,
+                         new_simulation, place_stones, ramp_gravity, remove_debris,
+                         shelf_centres)
+
+KPA = 1.0e3
+PLATEN, MEMBRANE = 2, 3      # wall materials: platens with Table 4.2's friction, side walls without
+
+
+@dataclass
+class BiaxialParams(DepositionParams):
+    # specimen (assembly)
+    width_m: float = 0.30              # 2D slice of the 300 mm x 600 mm triaxial cylinder
+    height_m: float = 0.60
+    membrane_friction: float = 0.0     # side walls stand for the membrane: frictionless
+    relax_steps: int = 5000
+    # loading
+    confining_pressure_kPa: float = 30.0
+    deviator_min_kPa: float = 15.0
+    deviator_max_kPa: float = 230.0
+    servo_gain_m_s_per_kPa: float = 2.0e-4
+    servo_velocity_m_s: float = 0.01
+    servo_integral_steps: int = 5000
+    consolidation_window_steps: int = 5000
+    consolidation_tolerance: float = 0.02
+    consolidation_max_windows: int = 200
+    platen_v_max_m_s: float = 0.005
+    platen_v_min_m_s: float = 0.0005
+    braking_fraction: float = 0.25
+    cycles: int = 100
+    control_every: int = 10
+    loading_dt_factor: float = 2.0
+    checkpoint_every: int = 50
+    timeseries_every: int = 10
+    vtk_cycles: list = field(default_factory=lambda: [0, -1])
+    max_cycle_steps: int = 5000000
+
+    @classmethod
+    def from_config(cls, rig):
+        """From the validated ``rig:`` dict: its biaxial stages merged."""
+        sec = (rig or {}).get("biaxial") or {}
+        merged = {**(sec.get("assembly") or {}), **(sec.get("loading") or {})}
+        names = {f.name for f in fields(cls)}
+        return cls(**{k: v for k, v in merged.items() if k in names})
+
+    def to_dict(self):
+        return asdict(self)
+
+
+@dataclass
+class BiaxialLayout:
+    bottom: list = field(default_factory=list)    # wall segment ids
+    top: list = field(default_factory=list)
+    left: list = field(default_factory=list)
+    right: list = field(default_factory=list)
+    stone_library_index: list = field(default_factory=list)
+    stone_material: list = field(default_factory=list)
+    n_stone_balls: int = 0
+    bonds_library: int = 0
+    bonds_installed: int = 0
+    seed: int = 0
+    database: str = ""
+    library: str = ""
+    stage_steps: dict = field(default_factory=dict)
+
+
+class BiaxialRig(Rig):
+    Layout = BiaxialLayout
+    Params = BiaxialParams
+    title = "cyclic biaxial case: assembled specimen"
+    kind = "biaxial"
+
+    def wall_groups(self):
+        lay = self.layout
+        return {"bottom": lay.bottom, "top": lay.top, "left": lay.left, "right": lay.right}
+
+    def _x(self, ids):
+        return float(self.sim.walls.seg[ids[0], 0])
+
+    def width(self):
+        return self._x(self.layout.right) - self._x(self.layout.left)
+
+    def height(self):
+        seg = self.sim.walls.seg
+        return float(seg[self.layout.top[0], 1] - seg[self.layout.bottom[0], 1])
+
+    def stresses(self):
+        """(sigma_axial at the top platen, sigma_left, sigma_right) [Pa], compression +."""
+        f = self.sim.wall_force()
+        t, lay = self.sim.thickness, self.layout
+        w, h = self.width(), self.height()
+        return (float(f[lay.top, 1].sum()) / (w * t), float(-f[lay.left, 0].sum()) / (h * t),
+                float(f[lay.right, 0].sum()) / (h * t))
+
+
+# ----------------------------------------------------------------------------- assembly
+def build_specimen(lib, params, seed):
+    """Stones on shelves in a tall box of the specimen's width (bottom platen at y = 0,
+    side walls reaching well above the shelves); bonds installed."""
+    p = params
+    rng = np.random.default_rng(seed)
+    picks = choose_stones(lib, p.fill_area_ratio * p.width_m * p.height_m, rng)
+    stones = [lib.stone(k) for k in picks]
+    w2 = 0.5 * p.width_m
+    centres, top = shelf_centres(stones, -w2, w2, p.placement_gap_factor, rng)
+    h_tall = top + p.height_m
+    margin = max(p.width_m, 0.1)
+    sim = new_simulation(lib, p, (-w2 - margin, -margin, w2 + margin, h_tall + margin),
+                         p.contact_damping_ratio)
+    lay = BiaxialLayout(seed=int(seed), database=lib.database, library=lib.path,
+                        stone_library_index=[int(k) for k in picks],
+                        stone_material=[int(s.material) for s in stones])
+    wide = 0.6 * p.width_m       # platens reach past the side walls as these move in
+    lay.bottom = sim.add_wall([(-w2 - wide, 0.0), (w2 + wide, 0.0)], material_id=PLATEN).tolist()
+    lay.left = sim.add_wall([(-w2, h_tall), (-w2, -0.05 * p.height_m)],
+                            material_id=MEMBRANE).tolist()
+    lay.right = sim.add_wall([(w2, -0.05 * p.height_m), (w2, h_tall)],
+                             material_id=MEMBRANE).tolist()
+    lay.bonds_library = place_stones(sim, lib, stones, centres, rng)
+    lay.n_stone_balls = len(sim.balls)
+    lay.bonds_installed = int(sim.install_flat_joints({m: lib.materials[m]["fj"]
+                                                      for m in (0, 1)}))
+    return BiaxialRig(sim, lay, p)
+
+
+def wall_friction(rig, mu):
+    """Platens: ``mu`` (Table 4.2's); side walls: the membrane's."""
+    sim = rig.sim
+    for m in (0, 1):
+        sim.set_contact_coefficient("mu", mu, m, PLATEN)
+        sim.set_contact_coefficient("mu", rig.params.membrane_friction, m, MEMBRANE)
+
+
+def assemble_biaxial(lib, params, seed, progress=None):
+    """Deposition, the cut at the specimen height, the top platen on the highest stone,
+    relaxation at normal gravity. Returns the BiaxialRig (not yet consolidated)."""
+    rig = build_specimen(lib, params, seed)
+    p, sim, lay, st = params, rig.sim, rig.layout, rig.layout.stage_steps
+    mu = lib.materials[0]["lc"].mu
+    n_stones = len(lay.stone_library_index)
+    st["drop"] = (deposition_conditions(rig, p, mu, on=True)
+                  + drop(rig, p, n_stones, progress))
+    st["gravity"] = ramp_gravity(rig, p.drop_gravity_m_s2, p.gravity_m_s2, p.gravity_ramp_steps,
+                                 progress)
+    b = sim.balls
+    ids = rig.stone_balls()
+    sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.height_m])
+    remove_debris(rig, p.min_fragment_balls)
+    deposition_conditions(rig, p, mu, on=False)
+    wall_friction(rig, mu)
+    sim.scale_bond_strength(1.0 / p.drop_bond_factor)
+    ids = rig.stone_balls()
+    top = float((b.pos[ids, 1] + b.rad[ids]).max())
+    w2, wide = 0.5 * p.width_m, 0.6 * p.width_m
+    lay.top = sim.add_wall([(w2 + wide, top), (-w2 - wide, top)], material_id=PLATEN).tolist()
+    sim.set_damping(p.damping)
+    sim.run(p.relax_steps)
+    st["relax"] = p.relax_steps
+    if progress is not None:
+        progress(p.relax_steps)
+    return rig
+
+
+# ----------------------------------------------------------------------------- loading
+AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors
+S_LEFT, S_RIGHT, S_TOP, PROFILE = range(4)                    # controllers
+
+
+def biaxial_control(rig):
+    """Stress sensors of the three moving walls, their positions, and the controllers:
+    three consolidation servos (the side ones stay on while cycling) and the profile."""
+    p, lay, t = rig.params, rig.layout, rig.sim.thickness
+    w, h = rig.width(), rig.height()
+    c = Control(every=p.control_every)
+    c.wall_force(lay.top, axis=1, scale=1.0 / (w * t))
+    c.wall_force(lay.left, axis=0, scale=-1.0 / (h * t))
+    c.wall_force(lay.right, axis=0, scale=1.0 / (h * t))
+    c.wall_position(lay.top, axis=1)
+    c.wall_position(lay.left, axis=0)
+    c.wall_position(lay.right, axis=0)
+    left, right, top = (c.walls(lay.left, 0), c.walls(lay.right, 0), c.walls(lay.top, 1))
+    servo = dict(target=p.confining_pressure_kPa * KPA, gain_unit=KPA,
+                 v_max=p.servo_velocity_m_s, integral_steps=p.servo_integral_steps,
+                 window_steps=p.consolidation_window_steps)
+    c.servo(LEFT, left, gain=-p.servo_gain_m_s_per_kPa, **servo)     # +x raises it
+    c.servo(RIGHT, right, gain=p.servo_gain_m_s_per_kPa, **servo)
+    c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa, **servo)
+    sig3 = p.confining_pressure_kPa * KPA
+    c.cyclic(AXIAL, top, lo=sig3 + p.deviator_min_kPa * KPA, hi=sig3 + p.deviator_max_kPa * KPA,
+             v_min=p.platen_v_min_m_s, v_max=p.platen_v_max_m_s, brake=p.braking_fraction,
+             direction=-1, active=False)
+    return c.build()
+
+
+CYCLE_FIELDS = {
+    "cycle_end_step": ("1", "engine step at the end of the cycle"),
+    "cycle_steps": ("1", "engine steps in the cycle"),
+    "axial_stress_max": ("Pa", "largest axial stress sigma_1 at the top platen in the cycle (2D: force / (width t))"),
+    "axial_stress_min": ("Pa", "smallest axial stress sigma_1 in the cycle"),
+    "confining_stress_mean": ("Pa", "mean side-wall stress sigma_3 over the cycle (2D: force / (height t))"),
+    "height_at_end": ("m", "specimen height between the platens at the end of the cycle"),
+    "width_at_end": ("m", "specimen width between the side walls at the end of the cycle"),
+    "elements_broken_tension": ("1", "flat-joint elements broken in tension since loading began"),
+    "elements_broken_shear": ("1", "flat-joint elements broken in shear since loading began"),
+}
+
+
+@dataclass
+class BiaxialState(CycleState):
+    phase: str = "consolidation"
+    windows: int = 0
+    height0: float = float("nan")     # H0, W0: at the end of consolidation
+    width0: float = float("nan")
+    window_means: list = field(default_factory=list)    # stress window means (axial, left, right)
+
+
+class BiaxialRun(CyclicRun):
+    """Consolidation, then quasi-static cycles of the deviator; per cycle the records above
+    and the behaviours (strains, breakage)."""
+    CHANNELS = {"axial_stress": AXIAL, "left_stress": LEFT, "right_stress": RIGHT,
+                "platen_y": HEIGHT, "left_x": X_LEFT, "right_x": X_RIGHT}
+    CYCLE_FIELDS = CYCLE_FIELDS
+    State = BiaxialState
+
+    def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
+                 resumed=False):
+        p = rig.params
+        super().__init__(rig, cycles, biaxial_control(rig), checkpoint,
+                         checkpoint_every or p.checkpoint_every, metrics, p.max_cycle_steps)
+        if p.loading_dt_factor > 1.0 and not resumed:
+            rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
+
+    def _rescale(self):
+        """Stress sensors follow the specimen's current size."""
+        c, t = self.control, self.rig.sim.thickness
+        w, h = self.rig.width(), self.rig.height()
+        c.set_scale(AXIAL, 1.0 / (w * t))
+        c.set_scale(LEFT, -1.0 / (h * t))
+        c.set_scale(RIGHT, 1.0 / (h * t))
+
+    def on_window(self, controller):
+        p, s, c = self.rig.params, self.s, self.control
+        means = c.window_means()
+        self._rescale()
+        if s.phase not in ("consolidation", "hold"):
+            return
+        s.windows += 1
+        sig = means[[AXIAL, LEFT, RIGHT]]
+        s.window_means.append([float(v) for v in sig])
+        p3 = p.confining_pressure_kPa * KPA
+        target = np.array([c.get(S_TOP, "target"), p3, p3])
+        if np.all(np.abs(sig - target) / target < p.consolidation_tolerance):
+            s.windows = 0
+            if s.phase == "hold":
+                s.phase = "held"
+                return
+            s.phase = "loading"
+            s.height0, s.width0 = self.rig.height(), self.rig.width()
+            for k in (S_LEFT, S_RIGHT):        # keep p; no more windows
+                c.set(k, window_steps=np.inf)
+            c.set(S_TOP, active=False)
+            c.set(PROFILE, active=True, direction=-1)
+        elif s.windows >= p.consolidation_max_windows:
+            raise RuntimeError(f"{s.phase} at {', '.join(f'{v / KPA:g}' for v in target)} kPa "
+                               f"not reached within {s.windows} windows (last means "
+                               f"{', '.join(f'{v / KPA:.2f}' for v in sig)} kPa)")
+
+    def hold(self, q_kPa):
+        """A static deviator stage (after consolidation, instead of cycling): the top servo
+        holds p + q, the side ones p, until the window means of all three are within the
+        tolerance. Returns those means (axial, left, right) [Pa]."""
+        p, s, c = self.rig.params, self.s, self.control
+        while s.phase == "consolidation":
+            self.advance()
+        c.set(PROFILE, active=False)
+        c.set(S_TOP, active=True, integral=0.0,
+              target=(p.confining_pressure_kPa + q_kPa) * KPA)
+        for k in (S_LEFT, S_RIGHT, S_TOP):
+            c.set(k, window_steps=p.consolidation_window_steps)
+        c.reset_window()
+        s.phase, s.windows = "hold", 0
+        while s.phase == "hold":
+            self.advance()
+        return np.array(s.window_means[-1])
+
+    def on_peak(self):
+        self._rescale()
+
+    def _trough(self):
+        """The first trough after consolidation starts cycle 0 (the platen has loaded to
+        p + q_max and unloaded to p + q_min once: the profile starts at the bound)."""
+        self._rescale()
+        super()._trough()
+
+    def strains(self):
+        """(axial, volumetric) strain since the end of consolidation, compression +."""
+        s = self.s
+        h, w = self.rig.height(), self.rig.width()
+        return 1.0 - h / s.height0, 1.0 - (w * h) / (s.width0 * s.height0)
+
+    def cycle_row(self):
+        rig, s = self.rig, self.s
+        modes = rig.sim.breakages()["mode"][s.log0:]
+        sig1 = self.cycle_samples("axial_stress")
+        sig3 = 0.5 * (self.cycle_samples("left_stress") + self.cycle_samples("right_stress"))
+        return dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
+                    axial_stress_max=float(sig1.max()), axial_stress_min=float(sig1.min()),
+                    confining_stress_mean=float(sig3.mean()), height_at_end=rig.height(),
+                    width_at_end=rig.width(),
+                    elements_broken_tension=int(np.sum(modes == "tension")),
+                    elements_broken_shear=int(np.sum(modes == "shear")))
+
+    def behaviours(self):
+        from ..metrics.breakage import breakage_rate
+        rig, s = self.rig, self.s
+        br = rig.sim.breakages()
+        mode = np.where(br["mode"][s.log0:] == "tension", 1, 2)
+        rates = breakage_rate(mode, br["step"][s.log0:], s.n_bonds0,
+                              [s.cycle_start_step, rig.sim.step + 1],
+                              int(rig.sim.bonds.state.shape[1]))
+        ea, ev = self.strains()
+        out = {k: v[0].item() for k, v in rates.items()}
+        out.update(axial_strain=float(ea), volumetric_strain=float(ev))
+        return out
+
+    def _thin_samples(self, k0, every=None):
+        super()._thin_samples(k0, max(1, int(self.rig.params.timeseries_every)))
+
+    @classmethod
+    def from_checkpoint(cls, path, cycles=None, checkpoint_every=None):
+        return super().from_checkpoint(path, BiaxialRig, cycles=cycles,
+                                       checkpoint_every=checkpoint_every)
+
+
+CHANNEL_UNITS = {
+    "axial_stress": ("Pa", "axial stress sigma_1 at the top platen (2D: force / (width t))"),
+    "left_stress": ("Pa", "stress on the left side wall (2D: force / (height t))"),
+    "right_stress": ("Pa", "stress on the right side wall (2D: force / (height t))"),
+    "platen_y": ("m", "top platen height"),
+    "left_x": ("m", "left side wall x"),
+    "right_x": ("m", "right side wall x"),
+}
+
+
+def write_biaxial_outputs(run, out, figures=True, attrs=None):
+    """metrics.nc of a biaxial run (+ the specimen figure beside it)."""
+    from pathlib import Path
+
+    from ..metrics.output import write_metrics
+    from .output import plot_behaviours, plot_case
+    from .records import breakage_records, cyclic_dataset
+    s = run.s
+    ds = cyclic_dataset(run, CHANNEL_UNITS, "cyclic biaxial case: per-cycle records and "
+                        "behaviours", {"confining_pressure_Pa": run.rig.params.confining_pressure_kPa * KPA,
+                                       "height_at_consolidation_m": s.height0,
+                                       "width_at_consolidation_m": s.width0,
+                                       "stress_convention": "2D stresses: force per boundary "
+                                       "length per thickness t; compression positive",
+                                       **(attrs or {})})
+    out = Path(out)
+    write_metrics(out, ds)
+    if figures:
+        plot_case(run.rig, out.with_name("case.png"), breakage_records(run),
+                  title=f"{ds.attrs['database']} seed {ds.attrs['seed']}: biaxial specimen "
+                        f"after {ds.sizes['cycle']} cycles (black hard, grey soft)")
+        plot_behaviours(ds, out.with_name("behaviours.png"))
+    return ds
