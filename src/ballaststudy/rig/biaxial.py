@@ -15,7 +15,8 @@ side walls (rigid, frictionless: a membrane's confinement without its bulging). 
 compression positive from the end of consolidation: axial 1 - H/H0, volumetric (area)
 1 - W H / (W0 H0), H and W between the walls' faces.
 """
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -32,6 +33,7 @@ PLATEN, MEMBRANE = 2, 3      # wall materials: platens with Table 4.2's friction
 
 @dataclass
 class BiaxialParams(DepositionParams):
+    RIG: ClassVar[str] = "biaxial"
     # specimen (assembly)
     width_m: float = 0.30              # 2D slice of the 300 mm x 600 mm triaxial cylinder
     height_m: float = 0.60
@@ -57,17 +59,6 @@ class BiaxialParams(DepositionParams):
     timeseries_every: int = 10
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
     max_cycle_steps: int = 5000000
-
-    @classmethod
-    def from_config(cls, rig):
-        """From the validated ``rig:`` dict: its biaxial stages merged."""
-        sec = (rig or {}).get("biaxial") or {}
-        merged = {**(sec.get("assembly") or {}), **(sec.get("loading") or {})}
-        names = {f.name for f in fields(cls)}
-        return cls(**{k: v for k, v in merged.items() if k in names})
-
-    def to_dict(self):
-        return asdict(self)
 
 
 @dataclass

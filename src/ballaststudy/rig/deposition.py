@@ -7,7 +7,8 @@ Everything here works on a ``specimen``: an object with ``sim`` (the Simulation)
 ball); the stone balls are balls 0..n-1, stone ids 0..k-1. A rig adds its container
 (walls, plates) around them; nothing here knows about it.
 """
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, fields
+from typing import ClassVar
 
 import numpy as np
 
@@ -17,7 +18,9 @@ from ..dem import ContactMaterial, Simulation
 @dataclass
 class DepositionParams:
     """What the kit's stages read (every rig's assembly section has these keys; the values
-    are config/thesis.yaml's, which says why)."""
+    are config/thesis.yaml's, which says why). A rig's parameters extend it and name their
+    config section ``RIG`` (rig.<RIG>.assembly / .loading)."""
+    RIG: ClassVar[str] = ""
     fill_area_ratio: float = 1.0       # ball area of the drawn stones / the specimen's area
     placement_gap_factor: float = 1.1  # shelf cell = factor * the stone's extent
     drop_gravity_m_s2: float = 1000.0
@@ -36,6 +39,18 @@ class DepositionParams:
     damping: float = 0.7
     contact_damping_ratio: float = 0.0
     dt_safety: float = 0.8
+
+    @classmethod
+    def from_config(cls, rig):
+        """From the validated ``rig:`` dict: the rig's stages merged (unknown keys are the
+        schema's business)."""
+        sec = (rig or {}).get(cls.RIG) or {}
+        merged = {**(sec.get("assembly") or {}), **(sec.get("loading") or {})}
+        names = {f.name for f in fields(cls)}
+        return cls(**{k: v for k, v in merged.items() if k in names})
+
+    def to_dict(self):
+        return asdict(self)
 
 
 def choose_stones(lib, area, rng):

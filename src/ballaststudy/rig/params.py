@@ -4,7 +4,8 @@
 each; the defaults here are its values, checked by tests/workflow/test_param_defaults.py).
 Units are SI unless the key names one. The rig code reads them flat (``params.width_m``);
 the stage a key belongs to decides what reruns when it is edited (workflow/rules/cases.smk)."""
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import dataclass, field
+from typing import ClassVar
 
 from ..config import job_seed
 from .deposition import DepositionParams
@@ -12,6 +13,7 @@ from .deposition import DepositionParams
 
 @dataclass
 class RigParams(DepositionParams):
+    RIG: ClassVar[str] = "box"
     # container of the box test (thesis 4.1): inner width = cylinder diameter, height
     width_m: float = 0.34
     height_m: float = 0.22
@@ -56,18 +58,6 @@ class RigParams(DepositionParams):
     timeseries_every: int = 10
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
     max_cycle_steps: int = 5000000
-
-    @classmethod
-    def from_config(cls, rig):
-        """From the validated ``rig:`` dict: its box's stages merged (unknown keys are the
-        schema's business)."""
-        box = (rig or {}).get("box") or {}
-        merged = {**(box.get("assembly") or {}), **(box.get("loading") or {})}
-        names = {f.name for f in fields(cls)}
-        return cls(**{k: v for k, v in merged.items() if k in names})
-
-    def to_dict(self):
-        return asdict(self)
 
     def to_config(self):
         """The ``rig:`` dict these parameters come from (by stage)."""

@@ -1,0 +1,60 @@
+"""Cyclic biaxial case benchmark: the default specimen of the config at its resolution.
+
+    NUMBA_NUM_THREADS=1 python bench/biaxial_benchmark.py [--cycles 10]
+        [--config config/config.yaml] [--library BPM.nc] [--seed 1]
+
+Uses the BPM library given, else box_test's at the config's resolution (built once and
+cached in results/bench_cache, like bench/case_benchmark.py). Prints assembly and
+consolidation times, then balls, bonds, steps per cycle, time per step and, LAST,
+``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase, for the quasi-static
+mode (the only one built so far). Never a test."""
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cycles", type=int, default=10)
+    ap.add_argument("--library", help="a BPM.nc (default: build box_test's)")
+    ap.add_argument("--config", default="config/config.yaml")
+    ap.add_argument("--seed", type=int, default=1)
+    a = ap.parse_args(argv)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from case_benchmark import box_test_library
+
+    from ballaststudy.config import load_config
+    from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRun, assemble_biaxial
+    from ballaststudy.rig.library import load_library
+    params = BiaxialParams.from_config(load_config(a.config).get("rig", {}))
+    lib = load_library(a.library or box_test_library(a.config))
+    t0 = time.perf_counter()
+    rig = assemble_biaxial(lib, params, seed=a.seed)
+    print(f"assembly: {time.perf_counter() - t0:.1f} s, stages {rig.layout.stage_steps}")
+    n_balls = int((rig.sim.balls.alive == 1).sum())
+    print(f"specimen {params.width_m:g} x {params.height_m:g} m: balls={n_balls} "
+          f"bonds={rig.layout.bonds_installed} dt={rig.sim.dt:.3g} s")
+    run = BiaxialRun(rig, cycles=a.cycles)
+    t1, s1 = time.perf_counter(), rig.sim.step
+    while run.s.phase in ("consolidation", "loading"):
+        run.advance()
+    print(f"consolidation + first loading: {time.perf_counter() - t1:.1f} s, "
+          f"{rig.sim.step - s1} steps, windows {len(run.s.window_means)}")
+    t2, s2 = time.perf_counter(), rig.sim.step
+    run.run()
+    t = time.perf_counter() - t2
+    steps = rig.sim.step - s2
+    per = t / a.cycles
+    print(f"mode=quasi_static cycles={a.cycles} steps_per_cycle={steps / a.cycles:.0f} "
+          f"time_per_step_us={t / steps * 1e6:.1f} ball_steps_per_s={n_balls * steps / t:.3g}")
+    print(f"axial strain after each cycle: {[round(r['axial_strain'], 5) for r in run.s.rows]}")
+    print(f"minutes_per_1000_cycles={per * 1000 / 60:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
