@@ -2,15 +2,18 @@
 
     NUMBA_NUM_THREADS=1 python bench/biaxial_benchmark.py [--cycles 10]
         [--config config/config.yaml] [--library BPM.nc] [--seed 1]
+        [--modes quasi_static real_time] [--frequency 20]
 
 Uses the BPM library given, else box_test's at the config's resolution (built once and
 cached in results/bench_cache, like bench/case_benchmark.py). Prints assembly and
-consolidation times, then balls, bonds, steps per cycle, time per step and, LAST,
-``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase, for the quasi-static
-mode (the only one built so far). Never a test."""
+consolidation times, then per loading mode (quasi-static; real-time at the frequency f,
+which it states) balls, bonds, steps per cycle, time per step and
+``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase. Both modes start from
+the same assembled specimen. Never a test."""
 import argparse
 import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -23,12 +26,14 @@ def main(argv=None):
     ap.add_argument("--library", help="a BPM.nc (default: build box_test's)")
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--modes", nargs="+", default=["quasi_static", "real_time"])
+    ap.add_argument("--frequency", type=float, help="f of the real-time mode [Hz] (config's)")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from case_benchmark import box_test_library
 
     from ballaststudy.config import load_config
-    from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRun, assemble_biaxial
+    from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRig, BiaxialRun, assemble_biaxial
     from ballaststudy.rig.library import load_library
     params = BiaxialParams.from_config(load_config(a.config).get("rig", {}))
     lib = load_library(a.library or box_test_library(a.config))
@@ -38,21 +43,31 @@ def main(argv=None):
     n_balls = int((rig.sim.balls.alive == 1).sum())
     print(f"specimen {params.width_m:g} x {params.height_m:g} m: balls={n_balls} "
           f"bonds={rig.layout.bonds_installed} dt={rig.sim.dt:.3g} s")
-    run = BiaxialRun(rig, cycles=a.cycles)
-    t1, s1 = time.perf_counter(), rig.sim.step
-    while run.s.phase in ("consolidation", "loading"):
-        run.advance()
-    print(f"consolidation + first loading: {time.perf_counter() - t1:.1f} s, "
-          f"{rig.sim.step - s1} steps, windows {len(run.s.window_means)}")
-    t2, s2 = time.perf_counter(), rig.sim.step
-    run.run()
-    t = time.perf_counter() - t2
-    steps = rig.sim.step - s2
-    per = t / a.cycles
-    print(f"mode=quasi_static cycles={a.cycles} steps_per_cycle={steps / a.cycles:.0f} "
-          f"time_per_step_us={t / steps * 1e6:.1f} ball_steps_per_s={n_balls * steps / t:.3g}")
-    print(f"axial strain after each cycle: {[round(r['axial_strain'], 5) for r in run.s.rows]}")
-    print(f"minutes_per_1000_cycles={per * 1000 / 60:.2f}")
+    assembled = Path(tempfile.mkdtemp()) / "assembled.nc"
+    rig.save(assembled)
+    for mode in a.modes:
+        rig = BiaxialRig.load(assembled)
+        rig.params.mode = mode
+        if a.frequency:
+            rig.params.frequency_Hz = a.frequency
+        state = f" f={rig.params.frequency_Hz:g} Hz" if mode == "real_time" else ""
+        run = BiaxialRun(rig, cycles=a.cycles)
+        t1, s1 = time.perf_counter(), rig.sim.step
+        while run.s.phase in ("consolidation", "loading"):
+            run.advance()
+        print(f"[{mode}{state}] consolidation + first loading: {time.perf_counter() - t1:.1f} s, "
+              f"{rig.sim.step - s1} steps, windows {len(run.s.window_means)}")
+        t2, s2 = time.perf_counter(), rig.sim.step
+        run.run()
+        t = time.perf_counter() - t2
+        steps = rig.sim.step - s2
+        per = t / a.cycles
+        print(f"[{mode}{state}] balls={n_balls} bonds={rig.layout.bonds_installed} "
+              f"cycles={a.cycles} steps_per_cycle={steps / a.cycles:.0f} dt={rig.sim.dt:.3g} s "
+              f"time_per_step_us={t / steps * 1e6:.1f} ball_steps_per_s={n_balls * steps / t:.3g}")
+        print(f"[{mode}{state}] axial strain after each cycle: "
+              f"{[round(r['axial_strain'], 5) for r in run.s.rows]}")
+        print(f"[{mode}{state}] minutes_per_1000_cycles={per * 1000 / 60:.2f}")
     return 0
 
 

@@ -27,10 +27,14 @@ Controllers:
   CYCLIC  bound-to-bound profile: moves with sign ``direction`` at v_max until the reading
           is within ``brake`` x (hi - lo) of the bound it approaches, then linearly down
           to v_min at the bound; reverses at hi (event PEAK) and at lo (event TROUGH).
+  SINE    real-time sinusoid: a PI servo (as SERVO) whose target follows
+          lo + (hi - lo) (1 - cos(2 pi f (t - t0))) / 2 in simulated time t, from lo at t0;
+          events at its half periods (PEAK at the maxima, TROUGH at the minima).
 
 All arrays live in one named container (``ControlArrays``); the ``Control`` class builds it
 and saves/restores it (rigs keep it in their checkpoints).
 """
+import math
 from collections import namedtuple
 
 import numpy as np
@@ -45,14 +49,16 @@ NCFG = 7
 # sensor kinds, actuator kinds, controller kinds
 CLUMP_REACTION, CLUMP_POSITION, WALL_FORCE, WALL_POSITION = 0, 1, 2, 3
 HELD_CLUMP, WALLS = 0, 1
-SERVO, CYCLIC = 1, 2
+SERVO, CYCLIC, SINE = 1, 2, 3
 # events
 NO_EVENT, WINDOW, PEAK, TROUGH, BUFFER_FULL = 0, 1, 2, 3, 4
 EVENT_NAMES = {WINDOW: "window", PEAK: "peak", TROUGH: "trough", BUFFER_FULL: "buffer full"}
 # controller parameters (cpar columns) and state (cst columns)
 TARGET, GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, WINDOW_STEPS, TOUCH = range(7)
 LO, HI, VMIN, BRAKE = 0, 1, 2, 4          # CYCLIC: VMAX = 3 as above
+SINE_LO, SINE_HI, FREQUENCY = 5, 6, 7     # SINE: GAIN ... INTEGRAL_STEPS as SERVO
 INTEGRAL, TOUCHED, APPROACH_STEPS, WINDOW_DONE = range(4)
+HALF_PERIODS, T0, NOW = 1, 2, 3           # SINE state (INTEGRAL = 0 as SERVO)
 DIRECTION = 0
 NPAR, NST = 8, 4
 assert VMAX == 3
@@ -62,6 +68,10 @@ _STATE = {"integral": INTEGRAL, "touched": TOUCHED, "approach_steps": APPROACH_S
 _SERVO_PAR = {"target": TARGET, "gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": VMAX,
               "integral_steps": INTEGRAL_STEPS, "window_steps": WINDOW_STEPS, "touch": TOUCH}
 _CYCLIC_PAR = {"lo": LO, "hi": HI, "v_min": VMIN, "v_max": VMAX, "brake": BRAKE}
+_SINE_PAR = {"gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": VMAX,
+             "integral_steps": INTEGRAL_STEPS, "lo": SINE_LO, "hi": SINE_HI,
+             "frequency": FREQUENCY}
+_SINE_STATE = {"integral": INTEGRAL, "half_periods": HALF_PERIODS, "t0": T0, "now": NOW}
 
 ControlArrays = namedtuple(
     "ControlArrays", "cfg sensors members scale actuators ctl cpar cst val wsum samp")
@@ -117,6 +127,34 @@ def _cyclic_update(c, k):
 
 
 @njit(**NO_NRT)
+def _sine_update(c, k, time):
+    """Half periods of the command since t0: PEAK at odd ones, TROUGH at even ones."""
+    st, par = c.cst[k], c.cpar[k]
+    st[NOW] = time
+    n = math.floor(2.0 * par[FREQUENCY] * (time - st[T0]))
+    if n > st[HALF_PERIODS]:
+        st[HALF_PERIODS] = n
+        return PEAK if n % 2 == 1 else TROUGH
+    return NO_EVENT
+
+
+@njit(**NO_NRT)
+def sine_target(par, st):
+    phase = 2.0 * math.pi * par[FREQUENCY] * (st[NOW] - st[T0])
+    return par[SINE_LO] + 0.5 * (par[SINE_HI] - par[SINE_LO]) * (1.0 - math.cos(phase))
+
+
+@njit(**NO_NRT)
+def _pi_velocity(st, par, target, f, every):
+    vmax = par[VMAX]
+    e = par[GAIN] * (target - f) / par[GAIN_UNIT]
+    if par[INTEGRAL_STEPS] > 0.0:
+        st[INTEGRAL] = min(max(st[INTEGRAL] + e * every / par[INTEGRAL_STEPS], -vmax), vmax)
+        e += st[INTEGRAL]
+    return min(max(-e, -vmax), vmax)
+
+
+@njit(**NO_NRT)
 def controller_velocity(c, k):
     """The velocity controller k commands from its sensor's last reading (the servo's
     integral advances: call once per control step)."""
@@ -124,12 +162,9 @@ def controller_velocity(c, k):
     f = c.val[c.ctl[k, 1]]
     vmax = par[VMAX]
     if c.ctl[k, 0] == SERVO:
-        e = par[GAIN] * (par[TARGET] - f) / par[GAIN_UNIT]
-        if par[INTEGRAL_STEPS] > 0.0:
-            st[INTEGRAL] = min(max(st[INTEGRAL] + e * float(c.cfg[EVERY]) / par[INTEGRAL_STEPS],
-                                   -vmax), vmax)
-            e += st[INTEGRAL]
-        return min(max(-e, -vmax), vmax)
+        return _pi_velocity(st, par, par[TARGET], f, float(c.cfg[EVERY]))
+    if c.ctl[k, 0] == SINE:
+        return _pi_velocity(st, par, sine_target(par, st), f, float(c.cfg[EVERY]))
     bound = par[HI] if st[DIRECTION] < 0.0 else par[LO]
     frac = min(1.0, abs(bound - f) / (par[BRAKE] * (par[HI] - par[LO])))
     return st[DIRECTION] * (par[VMIN] + (vmax - par[VMIN]) * frac)
@@ -174,7 +209,13 @@ def control_step(prm, step, clumps, walls, c):
     for k in range(c.ctl.shape[0]):
         if c.ctl[k, 3] == 0:
             continue
-        e = _servo_update(c, k) if c.ctl[k, 0] == SERVO else _cyclic_update(c, k)
+        kind = c.ctl[k, 0]
+        if kind == SERVO:
+            e = _servo_update(c, k)
+        elif kind == CYCLIC:
+            e = _cyclic_update(c, k)
+        else:
+            e = _sine_update(c, k, prm[P.TIME])
         windowing = windowing or (c.ctl[k, 0] == SERVO and c.cst[k, TOUCHED] > 0.0)
         if e != NO_EVENT and event == NO_EVENT:
             event = e
@@ -258,6 +299,15 @@ class Control:
         self._direction[k] = direction
         return k
 
+    def sine(self, sensor, actuator, lo, hi, frequency, gain, v_max, integral_steps,
+             gain_unit=1.0, active=True):
+        """Real-time sinusoid from lo to hi at ``frequency`` [Hz] (t0: ``set(k, t0=...)``
+        when it starts; the servo part as ``servo``)."""
+        par = np.zeros(NPAR)
+        par[[GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, SINE_LO, SINE_HI, FREQUENCY]] = (
+            gain, gain_unit, v_max, integral_steps, lo, hi, frequency)
+        return self._add(SINE, sensor, actuator, active, par)
+
     def _add(self, kind, sensor, actuator, active, par):
         self._ctl.append((kind, sensor, actuator, 1 if active else 0))
         self._par.append(par)
@@ -324,6 +374,8 @@ class Control:
 
     def _slot(self, k, name):
         a = self.arrays
+        if a.ctl[k, 0] == SINE:
+            return (a.cst, _SINE_STATE[name]) if name in _SINE_STATE else (a.cpar, _SINE_PAR[name])
         if name in _STATE:
             return a.cst, _STATE[name]
         if a.ctl[k, 0] == SERVO:

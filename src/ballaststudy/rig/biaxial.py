@@ -9,8 +9,10 @@ side walls (rigid, frictionless: a membrane's confinement without its bulging). 
 2. isotropic consolidation: three stress servos (left, right, top) hold p until the
    window means of all three are within ``consolidation_tolerance`` of p;
 3. cyclic loading: the side servos keep p; the top platen drives the axial stress
-   sigma_1 = p + q between p + q_min and p + q_max (quasi-static: the bound-to-bound
-   profile at the configured platen speeds; real-time: not yet built).
+   sigma_1 = p + q between p + q_min and p + q_max — quasi-static: the bound-to-bound
+   profile at the configured platen speeds, with density scaling (loading_dt_factor);
+   real-time: true masses, a stress servo following a sinusoid at the test's frequency f
+   in simulated time (a cycle lasts 1/f).
 2D stresses are forces per boundary length per thickness t (sigma = F / (L t)); strains are
 compression positive from the end of consolidation: axial 1 - H/H0, volumetric (area)
 1 - W H / (W0 H0), H and W between the walls' faces.
@@ -49,6 +51,8 @@ class BiaxialParams(DepositionParams):
     consolidation_window_steps: int = 5000
     consolidation_tolerance: float = 0.02
     consolidation_max_windows: int = 200
+    mode: str = "quasi_static"         # or "real_time": true masses, sinusoidal q at f
+    frequency_Hz: float = 20.0
     platen_v_max_m_s: float = 0.005
     platen_v_min_m_s: float = 0.0005
     braking_fraction: float = 0.25
@@ -177,7 +181,7 @@ def assemble_biaxial(lib, params, seed, progress=None):
 
 # ----------------------------------------------------------------------------- loading
 AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors
-S_LEFT, S_RIGHT, S_TOP, PROFILE = range(4)                    # controllers
+S_LEFT, S_RIGHT, S_TOP, PROFILE, SINUSOID = range(5)         # controllers
 
 
 def biaxial_control(rig):
@@ -200,9 +204,12 @@ def biaxial_control(rig):
     c.servo(RIGHT, right, gain=p.servo_gain_m_s_per_kPa, **servo)
     c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa, **servo)
     sig3 = p.confining_pressure_kPa * KPA
-    c.cyclic(AXIAL, top, lo=sig3 + p.deviator_min_kPa * KPA, hi=sig3 + p.deviator_max_kPa * KPA,
-             v_min=p.platen_v_min_m_s, v_max=p.platen_v_max_m_s, brake=p.braking_fraction,
-             direction=-1, active=False)
+    lo, hi = sig3 + p.deviator_min_kPa * KPA, sig3 + p.deviator_max_kPa * KPA
+    c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=p.platen_v_min_m_s, v_max=p.platen_v_max_m_s,
+             brake=p.braking_fraction, direction=-1, active=False)
+    c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz, gain=p.servo_gain_m_s_per_kPa,
+           gain_unit=KPA, v_max=p.servo_velocity_m_s, integral_steps=p.servo_integral_steps,
+           active=False)
     return c.build()
 
 
@@ -229,8 +236,8 @@ class BiaxialState(CycleState):
 
 
 class BiaxialRun(CyclicRun):
-    """Consolidation, then quasi-static cycles of the deviator; per cycle the records above
-    and the behaviours (strains, breakage)."""
+    """Consolidation, then cycles of the deviator (quasi-static or real-time); per cycle
+    the records above and the behaviours (strains, breakage)."""
     CHANNELS = {"axial_stress": AXIAL, "left_stress": LEFT, "right_stress": RIGHT,
                 "platen_y": HEIGHT, "left_x": X_LEFT, "right_x": X_RIGHT}
     CYCLE_FIELDS = CYCLE_FIELDS
@@ -241,7 +248,9 @@ class BiaxialRun(CyclicRun):
         p = rig.params
         super().__init__(rig, cycles, biaxial_control(rig), checkpoint,
                          checkpoint_every or p.checkpoint_every, metrics, p.max_cycle_steps)
-        if p.loading_dt_factor > 1.0 and not resumed:
+        if p.mode not in ("quasi_static", "real_time"):
+            raise ValueError(f"loading mode {p.mode!r}: quasi_static or real_time")
+        if p.mode == "quasi_static" and p.loading_dt_factor > 1.0 and not resumed:
             rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
     def _rescale(self):
@@ -273,7 +282,11 @@ class BiaxialRun(CyclicRun):
             for k in (S_LEFT, S_RIGHT):        # keep p; no more windows
                 c.set(k, window_steps=np.inf)
             c.set(S_TOP, active=False)
-            c.set(PROFILE, active=True, direction=-1)
+            if p.mode == "real_time":       # the sinusoid starts at p + q_min now
+                c.set(SINUSOID, active=True, t0=self.rig.sim.time, half_periods=0,
+                      integral=0.0)
+            else:
+                c.set(PROFILE, active=True, direction=-1)
         elif s.windows >= p.consolidation_max_windows:
             raise RuntimeError(f"{s.phase} at {', '.join(f'{v / KPA:g}' for v in target)} kPa "
                                f"not reached within {s.windows} windows (last means "
@@ -287,6 +300,7 @@ class BiaxialRun(CyclicRun):
         while s.phase == "consolidation":
             self.advance()
         c.set(PROFILE, active=False)
+        c.set(SINUSOID, active=False)
         c.set(S_TOP, active=True, integral=0.0,
               target=(p.confining_pressure_kPa + q_kPa) * KPA)
         for k in (S_LEFT, S_RIGHT, S_TOP):
