@@ -131,6 +131,7 @@ def test_unbreakable_stones_shake_down(specimen):
 def test_case_cli_runs_the_biaxial_rig(small_library, tmp_path):
     """`case assemble --rig biaxial` then `case run`: the rig kind travels with the
     assembled file; metrics.nc, figures and VTK written."""
+    import json
     from pathlib import Path
 
     import yaml
@@ -148,10 +149,19 @@ def test_case_cli_runs_the_biaxial_rig(small_library, tmp_path):
     asm, out = tmp_path / "assembled.nc", tmp_path / "metrics.nc"
     assert main(["case", "assemble", str(small_library), "--case", "0", "--rig", "biaxial",
                  "--out", str(asm), "--config", str(config), "--quiet"]) == 0
+    conditions = tmp_path / "test.yaml"          # a measured test's conditions
+    conditions.write_text(yaml.safe_dump(dict(
+        source="planted", rig="triaxial", confining_pressure_kPa=20.0, deviator_max_kPa=50.0,
+        frequency_Hz=10.0, curves=[dict(file="a.dat", quantity="axial_strain", units="1",
+                                        sign="compression_positive")])))
     assert main(["case", "run", str(asm), "--cycles", "2", "--out", str(out), "--config",
-                 str(config), "--quiet"]) == 0
+                 str(config), "--conditions", str(conditions), "--quiet"]) == 0
     with xr.open_dataset(out) as ds:
         assert ds.sizes["cycle"] == 2 and "axial_strain" in ds
+        prm = json.loads(ds.attrs["rig_params_json"])
+        assert (prm["confining_pressure_kPa"], prm["deviator_max_kPa"]) == (20.0, 50.0)
+        assert prm["frequency_Hz"] == 10.0 and prm["mode"] == "quasi_static"
+        assert np.all(ds["axial_stress_max"].values >= 70e3)
     assert (tmp_path / "behaviours.png").is_file() and any((tmp_path / "vtk").iterdir())
 
 

@@ -1,7 +1,7 @@
 # Measured cyclic tests in: every conditions YAML under measured.tests_dir (one test each,
 # its curve files beside it or in measured.data_dir) -> results/measured/<test>.nc.
 # A user adds a test by dropping its YAML (+ curve files) into the folder.
-import os
+import json
 from pathlib import Path
 
 from ballaststudy.measured.importer import curve_files, load_conditions
@@ -41,3 +41,63 @@ rule measured_import:
 rule measured_all:
     input:
         expand(f"{RESULTS}/measured/{{test}}.nc", test=MEASURED_TESTS),
+
+
+# Every measured test simulated: `cases` biaxial specimens (shared by all tests: the
+# conditions only act on the loading), each run under the test's p, q and f.
+MEASURED_SIM = config["measured"]["sim"]
+SIM_CASES = list(range(MEASURED_SIM["cases"]))
+
+
+rule measured_sim_assemble:
+    input:
+        bpm=f"{RESULTS}/bpm/{MEASURED_SIM['database']}.nc",
+    output:
+        f"{RESULTS}/measured_sim/specimens/case{{case}}.nc",
+    params:
+        assembly=json.dumps((config["rig"].get("biaxial") or {}).get("assembly") or {}, sort_keys=True),
+        config=CONFIG_FILE,
+    log:
+        f"{RESULTS}/logs/measured_sim/specimen{{case}}.log",
+    shell:
+        "ballaststudy case assemble {input.bpm} --case {wildcards.case} --rig biaxial "
+        "--config {params.config} --out {output} --quiet > {log} 2>&1"
+
+
+rule measured_sim_run:
+    input:
+        specimen=f"{RESULTS}/measured_sim/specimens/case{{case}}.nc",
+        conditions=lambda wc: MEASURED_TESTS_DIR / f"{wc.test}.yaml",
+    output:
+        f"{RESULTS}/measured_sim/cases/{{test}}/case{{case}}.nc",
+    params:
+        loading=json.dumps((config["rig"].get("biaxial") or {}).get("loading") or {}, sort_keys=True),
+        cycles=MEASURED_SIM["cycles"],
+        mode=MEASURED_SIM["mode"],
+        config=CONFIG_FILE,
+    log:
+        f"{RESULTS}/logs/measured_sim/{{test}}/case{{case}}.log",
+    shell:
+        "ballaststudy case run {input.specimen} --cycles {params.cycles} --conditions "
+        "{input.conditions} --mode {params.mode} --config {params.config} --out {output} "
+        "--no-vtk --no-figures --quiet > {log} 2>&1"
+
+
+rule measured_sim_compare:
+    input:
+        measured=f"{RESULTS}/measured/{{test}}.nc",
+        cases=lambda wc: expand(f"{RESULTS}/measured_sim/cases/{wc.test}/case{{case}}.nc",
+                                case=SIM_CASES),
+    output:
+        nc=f"{RESULTS}/measured_sim/compare/{{test}}.nc",
+        png=f"{RESULTS}/measured_sim/compare/{{test}}.png",
+    log:
+        f"{RESULTS}/logs/measured_sim/{{test}}/compare.log",
+    shell:
+        "ballaststudy measured compare {input.measured} {input.cases} --out {output.nc} "
+        "--quiet > {log} 2>&1"
+
+
+rule measured_sim:
+    input:
+        expand(f"{RESULTS}/measured_sim/compare/{{test}}.nc", test=MEASURED_TESTS),

@@ -19,6 +19,14 @@ def _import(args):
         print(f"wrote {args.out}: {', '.join(ds.data_vars)} at {ds.sizes['cycle']} cycles")
 
 
+def _compare(args):
+    from .compare import write_comparison
+    ds = write_comparison(args.measured, args.cases, args.out,
+                          figure=None if args.no_figure else args.out.with_suffix(".png"))
+    if not args.quiet:
+        print(f"wrote {args.out}: {ds.sizes['case']} simulated cases on {ds.sizes['cycle']} cycles")
+
+
 def register(subparsers):
     """Add the ``measured`` stage."""
     m = subparsers.add_parser("measured", help="measured cyclic tests in (curves + conditions)")
@@ -31,4 +39,11 @@ def register(subparsers):
                    help="folder to look up curve files not found beside the YAML")
     i.add_argument("--quiet", action="store_true")
     i.set_defaults(func=_import)
+    c = ms.add_parser("compare", help="a measured test beside its simulated cases -> netCDF + PNG")
+    c.add_argument("measured", type=Path, help="the test's netCDF (measured import)")
+    c.add_argument("cases", nargs="+", type=Path, help="metrics.nc of its biaxial cases")
+    c.add_argument("--out", required=True, type=Path)
+    c.add_argument("--no-figure", action="store_true")
+    c.add_argument("--quiet", action="store_true")
+    c.set_defaults(func=_compare)
     return m

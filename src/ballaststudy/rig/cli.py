@@ -77,6 +77,26 @@ def _rig_classes(kind):
     return BoxRig, LoadingRun, write_outputs
 
 
+def _measured_conditions(args, kind, params):
+    """A biaxial run under a measured test's conditions (p, q bounds, f) and/or a mode."""
+    if kind != "biaxial":
+        raise ConfigError(args.assembled, None, "--conditions / --mode need a biaxial case")
+    if args.mode:
+        params.mode = args.mode
+    if args.conditions:
+        from ..measured.importer import load_conditions
+        c = load_conditions(args.conditions)
+        if c["rig"] not in ("triaxial", "biaxial"):
+            raise ConfigError(args.conditions, "rig", f"{c['rig']}: a biaxial case runs "
+                              "triaxial or biaxial conditions")
+        params.confining_pressure_kPa = c["confining_pressure_kPa"]
+        params.deviator_max_kPa = c["deviator_max_kPa"]
+        if c.get("deviator_min_kPa") is not None:
+            params.deviator_min_kPa = c["deviator_min_kPa"]
+        if c.get("frequency_Hz") is not None:
+            params.frequency_Hz = c["frequency_Hz"]
+
+
 def _case_run(args):
     out = Path(args.out)
     ckpt = out.with_name(out.stem + ".checkpoint.npz")
@@ -85,7 +105,10 @@ def _case_run(args):
     kind = _rig_kind(args.assembled)
     rig_class, run_class, write_outputs = _rig_classes(kind)
     cfg, params = _params(args, kind)
-    recorder = Recorder("case run", inputs=(args.assembled, args.config),
+    if args.conditions or args.mode:
+        _measured_conditions(args, kind, params)
+    recorder = Recorder("case run", inputs=(args.assembled, args.config,
+                                            *([args.conditions] if args.conditions else [])),
                         params={"cycles": args.cycles, "rig": params.to_dict(),
                                 "metrics": cfg.get("metrics")})
     if ckpt.exists() and not args.restart:
@@ -127,8 +150,10 @@ def _case_run(args):
     if run.s.phase != "done":
         print(f"stopped after cycle {run.s.cycle} (checkpoint {ckpt})", file=sys.stderr)
         return
-    write_outputs(run, out, figures=not args.no_figures,
-                  attrs={"assembled_file": str(args.assembled)})
+    attrs = {"assembled_file": str(args.assembled)}
+    if args.conditions:
+        attrs["measured_conditions_file"] = str(args.conditions)
+    write_outputs(run, out, figures=not args.no_figures, attrs=attrs)
     recorder.finish()
     recorder.write_beside(out)
     if not args.quiet:
@@ -159,6 +184,10 @@ def register(subparsers):
     r.add_argument("--stop-after", type=int, help=argparse_suppress())
     r.add_argument("--no-vtk", action="store_true", help="write no VTK snapshots")
     r.add_argument("--no-figures", action="store_true", help="write no PNG figures")
+    r.add_argument("--conditions", type=Path, help="biaxial: run under this measured test's "
+                   "p, q bounds and f (its conditions YAML)")
+    r.add_argument("--mode", choices=("quasi_static", "real_time"), help="biaxial: override "
+                   "the loading mode")
     r.add_argument("--config", default="config/config.yaml", type=Path)
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_case_run)
