@@ -194,3 +194,13 @@ def test_real_time_mode_follows_the_frequency(specimen):
     hi = (p.confining_pressure_kPa + p.deviator_max_kPa) * KPA
     assert np.all(np.array(run.cyc["axial_stress_max"]) > lo + 0.85 * (hi - lo))
     assert np.all(np.array(run.cyc["axial_stress_min"]) < lo + 0.2 * (hi - lo))
+
+
+def test_a_deviator_beyond_the_strength_is_reported(specimen):
+    """q_max far above what the specimen can carry: the first loading stops with one
+    clear error after max_cycle_steps instead of pressing on for ever."""
+    rig = BiaxialRig.load(specimen)
+    rig.params.deviator_max_kPa, rig.params.max_cycle_steps = 5000.0, 20000
+    run = BiaxialRun(rig, cycles=1)
+    with pytest.raises(RuntimeError, match="yields below it"):
+        run.run()

@@ -230,6 +230,7 @@ CYCLE_FIELDS = {
 class BiaxialState(CycleState):
     phase: str = "consolidation"
     windows: int = 0
+    loading_start_step: int = -1      # end of consolidation
     height0: float = float("nan")     # H0, W0: at the end of consolidation
     width0: float = float("nan")
     window_means: list = field(default_factory=list)    # stress window means (axial, left, right)
@@ -278,6 +279,7 @@ class BiaxialRun(CyclicRun):
                 s.phase = "held"
                 return
             s.phase = "loading"
+            s.loading_start_step = self.rig.sim.step
             s.height0, s.width0 = self.rig.height(), self.rig.width()
             for k in (S_LEFT, S_RIGHT):        # keep p; no more windows
                 c.set(k, window_steps=np.inf)
@@ -313,6 +315,19 @@ class BiaxialRun(CyclicRun):
 
     def on_peak(self):
         self._rescale()
+
+    def check_stalled(self):
+        """The first loading to p + q_max must end within max_cycle_steps too: a specimen
+        weaker than sigma_1 = p + q_max yields without end instead."""
+        s, p = self.s, self.rig.params
+        steps = self.rig.sim.step - s.loading_start_step
+        if s.phase == "loading" and steps > p.max_cycle_steps:
+            raise RuntimeError(
+                f"the first loading did not reach p + q_max = "
+                f"{p.confining_pressure_kPa + p.deviator_max_kPa:g} kPa within {steps} steps "
+                f"(axial stress {self.control.reading(AXIAL) / KPA:.1f} kPa, axial strain "
+                f"{self.strains()[0]:.4f}): the specimen yields below it")
+        super().check_stalled()
 
     def _trough(self):
         """The first trough after consolidation starts cycle 0 (the platen has loaded to
