@@ -390,8 +390,8 @@ def write_biaxial_outputs(run, out, figures=True, attrs=None):
     from pathlib import Path
 
     from ..metrics.output import write_metrics
-    from .output import plot_behaviours, plot_case
-    from .records import breakage_records, cyclic_dataset
+    from .output import write_figures
+    from .records import cyclic_dataset
     s = run.s
     ds = cyclic_dataset(run, CHANNEL_UNITS, "cyclic biaxial case: per-cycle records and "
                         "behaviours", {"confining_pressure_Pa": run.rig.params.confining_pressure_kPa * KPA,
@@ -400,11 +400,7 @@ def write_biaxial_outputs(run, out, figures=True, attrs=None):
                                        "stress_convention": "2D stresses: force per boundary "
                                        "length per thickness t; compression positive",
                                        **(attrs or {})})
-    out = Path(out)
-    write_metrics(out, ds)
+    write_metrics(Path(out), ds)
     if figures:
-        plot_case(run.rig, out.with_name("case.png"), breakage_records(run),
-                  title=f"{ds.attrs['database']} seed {ds.attrs['seed']}: biaxial specimen "
-                        f"after {ds.sizes['cycle']} cycles (black hard, grey soft)")
-        plot_behaviours(ds, out.with_name("behaviours.png"))
+        write_figures(run, ds, out, "biaxial specimen ")
     return ds

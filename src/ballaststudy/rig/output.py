@@ -74,14 +74,19 @@ def plot_behaviours(ds, path):
     return path
 
 
-def write_outputs(run, out, figures=True, attrs=None):
-    """metrics.nc (+ figures beside it). Returns the dataset."""
+def write_figures(run, ds, out, what=""):
+    """case.png and behaviours.png beside ``out`` (any rig)."""
     from .records import breakage_records
     out = Path(out)
-    ds = write_metrics(run, out, attrs)
+    plot_case(run.rig, out.with_name("case.png"), breakage_records(run),
+              title=f"{ds.attrs['database']} seed {ds.attrs['seed']}: {what}after "
+                    f"{ds.sizes['cycle']} cycles (black hard, grey soft)")
+    plot_behaviours(ds, out.with_name("behaviours.png"))
+
+
+def write_outputs(run, out, figures=True, attrs=None):
+    """metrics.nc of a box run (+ figures beside it). Returns the dataset."""
+    ds = write_metrics(run, Path(out), attrs)
     if figures:
-        plot_case(run.rig, out.with_name("case.png"), breakage_records(run),
-                  title=f"{ds.attrs['database']} seed {ds.attrs['seed']}: after "
-                        f"{len(ds['cycle'])} cycles (black hard, grey soft)")
-        plot_behaviours(ds, out.with_name("behaviours.png"))
+        write_figures(run, ds, out)
     return ds
