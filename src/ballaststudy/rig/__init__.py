@@ -1,18 +1,24 @@
-"""The box-test rig (thesis 4.1-4.2.3): a BPM library's stones assembled in the box and
-loaded, statically (10/20/30 kN) then cyclically (15-45 kN), with per-cycle records.
+"""The rigs: a BPM library's stones assembled in a container and loaded cyclically, with
+per-cycle records — the box test (thesis 4.1-4.2.3) and the cyclic biaxial test (the 2D
+analogue of the cyclic triaxial test of the measured data).
 
-Modules: ``library`` (BPM.nc reader, synthetic stand-in), ``params`` (the ``rig:``
-config), ``box`` (BoxRig: Simulation + layout, save/load), ``assembly`` (drop, tamping,
-container reset, plate, loading ball, relaxation), ``loading`` (LoadingRun: servo, cyclic
-reversal, records, checkpoints), ``records`` / ``output`` (metrics.nc, figures),
-``vtk`` (ParaView snapshots), ``cli`` (``ballaststudy case assemble|run``).
-Rig operations are "fix"-like steps between engine runs of ``ballaststudy.dem``.
+The kit: ``deposition`` (placing, dropping, settling stones in any container), ``base``
+(Rig: Simulation + layout + parameters, save/load), ``cyclic`` (CyclicRun: the event loop
+over the controllers that run inside the engine's loop, ``ballaststudy.dem.control``;
+records, behaviours, checkpoints), ``records`` / ``output`` (metrics.nc, figures), ``vtk``
+(ParaView snapshots), ``library`` (BPM.nc reader, synthetic stand-in).
+The box: ``params`` (RigParams), ``box`` (BoxRig), ``assembly`` (drop, tamping, container
+reset, plate, loading ball, relaxation), ``loading`` (LoadingRun: static servo, cyclic
+profile). The biaxial test: ``biaxial`` (BiaxialParams, BiaxialRig, assemble_biaxial,
+BiaxialRun). ``cli``: ``ballaststudy case assemble|run``.
 """
 from .assembly import assemble
+from .biaxial import BiaxialParams, BiaxialRig, BiaxialRun, assemble_biaxial
 from .box import BoxRig
 from .library import Library, load_library, synthetic_library
 from .loading import LoadingRun
 from .params import RigParams, case_seed
 
 __all__ = ["assemble", "BoxRig", "Library", "load_library", "synthetic_library",
-           "LoadingRun", "RigParams", "case_seed"]
+           "LoadingRun", "RigParams", "case_seed", "BiaxialParams", "BiaxialRig",
+           "BiaxialRun", "assemble_biaxial"]
