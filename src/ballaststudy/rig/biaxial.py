@@ -53,6 +53,8 @@ class BiaxialParams(DepositionParams):
     consolidation_max_windows: int = 200
     mode: str = "quasi_static"         # or "real_time": true masses, sinusoidal q at f
     frequency_Hz: float = 20.0
+    realtime_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo in real-time mode
+    realtime_velocity_m_s: float = 0.05
     platen_v_max_m_s: float = 0.005
     platen_v_min_m_s: float = 0.0005
     braking_fraction: float = 0.25
@@ -207,9 +209,9 @@ def biaxial_control(rig):
     lo, hi = sig3 + p.deviator_min_kPa * KPA, sig3 + p.deviator_max_kPa * KPA
     c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=p.platen_v_min_m_s, v_max=p.platen_v_max_m_s,
              brake=p.braking_fraction, direction=-1, active=False)
-    c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz, gain=p.servo_gain_m_s_per_kPa,
-           gain_unit=KPA, v_max=p.servo_velocity_m_s, integral_steps=p.servo_integral_steps,
-           active=False)
+    c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
+           gain=p.realtime_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.realtime_velocity_m_s,
+           integral_steps=p.servo_integral_steps, active=False)
     return c.build()
 
 
