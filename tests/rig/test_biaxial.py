@@ -90,6 +90,15 @@ def test_cycles_reach_bounds_with_confinement_held(cycled, tmp_path):
     np.testing.assert_allclose(c["confining_stress_mean"], p.confining_pressure_kPa * KPA, rtol=0.05)
     ea = [r["axial_strain"] for r in cycled.s.rows]
     assert np.all(np.isfinite(ea)) and ea[-1] > 0          # compressed under the deviator
+    # packing of the specimen rectangle: the balls' porosity = 1 - their disk area / W H
+    # (bonded disks overlap a little: within 0.02), stones as solid leave less void
+    rig, last = cycled.rig, cycled.s.rows[-1]
+    ids = rig.stone_balls()
+    disks = np.pi * (rig.sim.balls.rad[ids] ** 2).sum() / (rig.width() * rig.height())
+    assert last["void_ratio_balls"] == pytest.approx(1 - disks, abs=0.02)
+    assert 0 < last["void_ratio"] < last["void_ratio_balls"]
+    stones_left = np.unique(rig.sim.balls.stone[ids]).size      # the cut deleted some
+    assert last["mean_coordination"] >= 1.0 and last["n_fragments"] >= stones_left
     ds = write_biaxial_outputs(cycled, tmp_path / "metrics.nc")
     with xr.open_dataset(tmp_path / "metrics.nc") as back:
         assert back.sizes["cycle"] == CYCLES

@@ -356,6 +356,8 @@ class BiaxialRun(CyclicRun):
                     elements_broken_shear=int(np.sum(modes == "shear")))
 
     def behaviours(self):
+        """Strains, breakage (eqs. 4.6-4.8), fragments, mean coordination and void ratio of
+        the specimen rectangle between the walls (ballaststudy.metrics' functions)."""
         from ..metrics.breakage import breakage_rate
         rig, s = self.rig, self.s
         br = rig.sim.breakages()
@@ -365,8 +367,46 @@ class BiaxialRun(CyclicRun):
                               int(rig.sim.bonds.state.shape[1]))
         ea, ev = self.strains()
         out = {k: v[0].item() for k, v in rates.items()}
-        out.update(axial_strain=float(ea), volumetric_strain=float(ev))
+        out.update(axial_strain=float(ea), volumetric_strain=float(ev), **self.packing())
         return out
+
+    def packing(self):
+        """Fragments, mean coordination number (ball-ball contacts carrying force) and
+        void ratios of the specimen rectangle, stones as solid and balls as solid."""
+        from ..metrics import MetricsParams
+        from ..metrics.coordination import coordination_numbers
+        from ..metrics.fragments import fragments
+        from ..metrics.void_ratio import SolidCache, void_ratio
+        if not hasattr(self, "_solids"):
+            self._params = MetricsParams.from_config(self.s.metrics_cfg)
+            self._solids = SolidCache(self._params.solid_reuse_tolerance)
+        rig, mp = self.rig, self._params
+        b, bd = rig.sim.balls, rig.sim.bonds
+        stone = np.zeros(len(b), bool)
+        stone[rig.stone_balls()] = True
+        nf, labels = fragments(len(b), bd.i, bd.j, rig.sim.intact_bonds(), stone)
+        cl = rig.sim.contact_list()
+        ball = cl["j"] >= 0
+        i, j = cl["i"][ball], cl["j"][ball]
+        d = b.pos[j] - b.pos[i]
+        nrm = d / np.hypot(*d.T)[:, None]
+        fn = cl["fx"][ball] * nrm[:, 0] + cl["fy"][ball] * nrm[:, 1]
+        cn = coordination_numbers(labels, nf, i, j, fn, mp.contact_force_threshold, False)
+        seg, lay = rig.sim.walls.seg, rig.layout
+        vr = void_ratio(b.pos, b.rad, labels, nf, bd.i, bd.j, rig.sim.intact_bonds(),
+                        self._x_face(lay.left), self._x_face(lay.right),
+                        float(seg[lay.bottom[0], 1]), float(seg[lay.top[0], 1]),
+                        mp.disk_quad_segs, self._solids)
+        return dict(n_fragments=int(nf), mean_coordination=float(cn.mean()) if nf else np.nan,
+                    void_ratio=vr["void_ratio"], void_ratio_e=vr["void_ratio_e"],
+                    void_ratio_balls=vr["void_ratio_balls"])
+
+    def _x_face(self, ids):
+        return float(self.rig.sim.walls.seg[ids[0], 0])
+
+    def on_cycle_end(self):
+        if self.s.cycle % self.checkpoint_every == 0 and hasattr(self, "_solids"):
+            self._solids.clear()     # a resumed run computes what an uninterrupted one does
 
     def _thin_samples(self, k0, every=None):
         super()._thin_samples(k0, max(1, int(self.rig.params.timeseries_every)))
