@@ -31,6 +31,16 @@ class Rig:
         ids = np.arange(self.layout.n_stone_balls)
         return ids[b.alive[ids] == 1]
 
+    def ball_contacts(self):
+        """Ball-ball contacts carrying force: (i, j, |normal force| [N])."""
+        b = self.sim.balls
+        cl = self.sim.contact_list()
+        ball = cl["j"] >= 0
+        i, j = cl["i"][ball], cl["j"][ball]
+        d = b.pos[j] - b.pos[i]
+        nrm = d / np.hypot(*d.T)[:, None]
+        return i, j, np.abs(cl["fx"][ball] * nrm[:, 0] + cl["fy"][ball] * nrm[:, 1])
+
     def wall_groups(self):
         """{name: segment ids} of the walls that bound the specimen (drawn, VTK kinds)."""
         return {}

@@ -384,25 +384,18 @@ class BiaxialRun(CyclicRun):
         b, bd = rig.sim.balls, rig.sim.bonds
         stone = np.zeros(len(b), bool)
         stone[rig.stone_balls()] = True
-        nf, labels = fragments(len(b), bd.i, bd.j, rig.sim.intact_bonds(), stone)
-        cl = rig.sim.contact_list()
-        ball = cl["j"] >= 0
-        i, j = cl["i"][ball], cl["j"][ball]
-        d = b.pos[j] - b.pos[i]
-        nrm = d / np.hypot(*d.T)[:, None]
-        fn = cl["fx"][ball] * nrm[:, 0] + cl["fy"][ball] * nrm[:, 1]
-        cn = coordination_numbers(labels, nf, i, j, fn, mp.contact_force_threshold, False)
+        intact = rig.sim.intact_bonds()
+        nf, labels = fragments(len(b), bd.i, bd.j, intact, stone)
+        cn = coordination_numbers(labels, nf, *rig.ball_contacts(),
+                                  mp.contact_force_threshold, False)
         seg, lay = rig.sim.walls.seg, rig.layout
-        vr = void_ratio(b.pos, b.rad, labels, nf, bd.i, bd.j, rig.sim.intact_bonds(),
-                        self._x_face(lay.left), self._x_face(lay.right),
+        vr = void_ratio(b.pos, b.rad, labels, nf, bd.i, bd.j, intact,
+                        rig._x(lay.left), rig._x(lay.right),
                         float(seg[lay.bottom[0], 1]), float(seg[lay.top[0], 1]),
                         mp.disk_quad_segs, self._solids)
         return dict(n_fragments=int(nf), mean_coordination=float(cn.mean()) if nf else np.nan,
                     void_ratio=vr["void_ratio"], void_ratio_e=vr["void_ratio_e"],
                     void_ratio_balls=vr["void_ratio_balls"])
-
-    def _x_face(self, ids):
-        return float(self.rig.sim.walls.seg[ids[0], 0])
 
     def on_cycle_end(self):
         if self.s.cycle % self.checkpoint_every == 0 and hasattr(self, "_solids"):

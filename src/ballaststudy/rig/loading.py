@@ -226,14 +226,10 @@ class LoadingRun(CyclicRun):
         n = len(b)
         ballast = np.zeros(n, bool)
         ballast[: lay.n_stone_balls] = b.alive[: lay.n_stone_balls] == 1
+        i, j, fn = rig.ball_contacts()
         cl = sim.contact_list()
-        ball = cl["j"] >= 0
-        i, j = cl["i"][ball], cl["j"][ball]
-        d = b.pos[j] - b.pos[i]
-        nrm = d / np.hypot(*d.T)[:, None]
-        fn = np.abs(cl["fx"][ball] * nrm[:, 0] + cl["fy"][ball] * nrm[:, 1])
         container = set(lay.bottom) | set(lay.left) | set(lay.right)
-        wall = ~ball
+        wall = cl["j"] < 0
         touch = np.zeros(n, bool)
         seg = -1 - cl["j"][wall]
         touch[cl["i"][wall][np.isin(seg, list(container))]] = True
