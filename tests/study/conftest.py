@@ -75,22 +75,18 @@ def metrics_dataset(series, units=None, database=None, case=None):
     return xr.Dataset(data, coords={"cycle": np.arange(n)}, attrs=attrs)
 
 
-def planted_study_inputs(tmp_path, rng, databases=THESIS, n_cases=4, n_cycles=12, settlement_of_fines=None,
-                         jump=True):
-    """Write forms + metrics files for a thesis-like study with planted behaviour:
-    final settlement a hinge in the fines x at 17 % (2 mm + 0.05 mm/% below, 6 mm + 0.4 mm/% above),
-    GP = 10 + 2 x settlement (mm) + noise, VR rising with mean size and falling with fines,
-    FPA ~ 55 deg flat except high fines (fluctuating), BR ~ 0.2 % noise without trend."""
+def planted_datasets(rng, databases=THESIS, n_cases=4, n_cycles=12, settlement_of_fines=None, jump=True):
+    """Forms {database: Dataset} and metrics {(database, case): Dataset} of a thesis-like study
+    with planted behaviour: final settlement a hinge in the fines x at 17 % (2 mm + 0.05 mm/%
+    below, 6 mm + 0.4 mm/% above), GP = 10 + 2 x settlement (mm) + noise, VR rising with mean
+    size and falling with fines, FPA ~ 55 deg flat except high fines (fluctuating), BR ~ 0.2 %
+    noise without trend."""
     from ballaststudy.study.aggregate import database_coordinates
     metrics, forms = {}, {}
     settlement_of_fines = settlement_of_fines or (
         lambda x: 2e-3 + 5e-5 * x if x < 17 else 6e-3 + 4e-4 * (x - 17.5))
     for name, (grading, si) in databases.items():
-        fds = forms_from_grading(name, grading, si)
-        fp = tmp_path / "forms" / f"{name}.nc"
-        fp.parent.mkdir(parents=True, exist_ok=True)
-        fds.to_netcdf(fp)
-        forms[name] = fp
+        fds = forms[name] = forms_from_grading(name, grading, si)
         coords = database_coordinates(fds)
         x, size_mm = coords["percent_passing_22_4mm"], coords["mean_size"] * 1e3
         for case in range(n_cases):
@@ -107,17 +103,38 @@ def planted_study_inputs(tmp_path, rng, databases=THESIS, n_cases=4, n_cycles=12
             series = {"settlement": settlement, "ghost_particles": ghost, "void_ratio": vr, "fpa": fpa,
                       "fpa_left": fpa, "fpa_right": fpa, "breakage_rate": br, "breakage_rate_tension": br / 2,
                       "breakage_rate_shear": br / 2, "mean_coordination": np.full(n_cycles, 3.5)}
-            mp = tmp_path / "cases" / name / f"case_{case:02d}" / "metrics.nc"
-            mp.parent.mkdir(parents=True, exist_ok=True)
-            metrics_dataset(series).to_netcdf(mp)
-            metrics[(name, case)] = mp
+            metrics[(name, case)] = metrics_dataset(series)
     return metrics, forms
+
+
+def planted_study_inputs(tmp_path, rng, **kw):
+    """`planted_datasets` written as forms/<database>.nc and cases/<database>/case_<k>/metrics.nc;
+    returns ({(database, case): path}, {database: path})."""
+    metrics, forms = planted_datasets(rng, **kw)
+
+    def write(ds, rel):
+        p = tmp_path / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(p)
+        return p
+    return ({(db, c): write(ds, f"cases/{db}/case_{c:02d}/metrics.nc") for (db, c), ds in metrics.items()},
+            {db: write(ds, f"forms/{db}.nc") for db, ds in forms.items()})
+
+
+def planted_study(rng, **kw):
+    """`planted_datasets` as a study Dataset built in memory (cheap even at the thesis' 10 cases x
+    1000 cycles)."""
+    from ballaststudy.study.aggregate import build_study
+    metrics, forms = planted_datasets(rng, **kw)
+    return build_study({k: ("{}/{}".format(*k), ds) for k, ds in metrics.items()},
+                       {k: (k, ds) for k, ds in forms.items()})
 
 
 @pytest.fixture
 def synth():
     return types.SimpleNamespace(forms_dataset=forms_dataset, forms_from_grading=forms_from_grading,
-                                 metrics_dataset=metrics_dataset, planted=planted_study_inputs, THESIS=THESIS)
+                                 metrics_dataset=metrics_dataset, planted=planted_study_inputs,
+                                 planted_study=planted_study, THESIS=THESIS)
 
 
 @pytest.fixture(scope="module")

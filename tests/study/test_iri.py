@@ -10,9 +10,9 @@ import pytest
 import xarray as xr
 
 from ballaststudy.config import ConfigError
-from ballaststudy.study import iri_table, write_iri
-from ballaststudy.study import stats
+from ballaststudy.study import iri_table, stats, write_iri
 from ballaststudy.study.cli import register
+from ballaststudy.study.iri import scale_note
 
 
 def planted(n_db=6, n_case=5, n_cycle=4, seed=1):
@@ -86,6 +86,14 @@ def test_final_and_change_use_last_run_cycle():
     np.testing.assert_allclose(stats.level_value(s), [8 / 3, 16 / 3, np.nan])
 
 
+def test_verdicts_kept_below_the_thesis_scale():
+    # the verdicts describe the samples at any scale; only the note says the run is short
+    short, full = planted(n_case=5, n_cycle=4), planted(n_case=10, n_cycle=1000)
+    assert scale_note(short).startswith("**Far below the thesis' scale.**") and scale_note(full) == ""
+    assert _row(iri_table(short, n_boot=500, seed=3), "IRI_BS-GP", "final").verdict == "positive"
+    assert _row(iri_table(full, n_boot=500, seed=3), "IRI_BS-GP", "final").verdict == "positive"
+
+
 def test_write_iri_files_and_cli(tmp_path):
     study = planted()
     paths = write_iri(study, tmp_path / "iri", n_boot=200)
@@ -93,6 +101,8 @@ def test_write_iri_files_and_cli(tmp_path):
     assert len(pd.read_csv(paths[0])) == 20
     md = paths[1].read_text()
     assert "Verdict rule" in md and "|rho| >= 0.3" in md and "IRI_BS-GP" in md
+    assert md.splitlines()[2].startswith("**Far below the thesis' scale.** This study ran 5 cases per database "
+                                         "and 4 load cycles per case")
     assert paths[2].stat().st_size > 1000
     # CLI: a study file without the behaviours is refused with its name
     bad = tmp_path / "not_a_study.nc"

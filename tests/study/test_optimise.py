@@ -1,5 +1,6 @@
 """Ranking, Pareto set, the fines-threshold fit and the thesis' findings (holds / does not
-hold / not decidable) on planted data; the optimisation report and the CLI."""
+hold / not decidable, and not decidable at this scale far below the thesis' scale) on planted
+data; the optimisation report and the CLI."""
 
 import argparse
 import json
@@ -9,17 +10,19 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from ballaststudy.study import aggregate, check_findings, pareto_set, rank_databases
-from ballaststudy.study import optimise, stats
+from ballaststudy.study import aggregate, check_findings, optimise, pareto_set, rank_databases, scale, stats
 from ballaststudy.study.cli import register
+from ballaststudy.study.report import report_markdown, scale_banner
 
 MARKS = {"holds", "does not hold", "not decidable"}
+AT_SCALE = "not decidable at this scale"
 FINDINGS = ["jump_G_1-1", "jump_G_2-5", "fines_threshold", "gp_with_settlement", "vr_with_mean_size",
             "vr_with_fines", "fpa_stability", "breakage_low_no_trend", "optimum"]
 
 
 def _marks(study, **kw):
-    return {f["finding"]: f["mark"] for f in check_findings(study, n_boot=500, **kw)}
+    """The rules' marks (the planted studies here are far below the thesis' scale)."""
+    return {f["finding"]: f["mark_by_rule"] for f in check_findings(study, n_boot=500, **kw)}
 
 
 def test_pareto_on_hand_table():
@@ -78,8 +81,9 @@ def test_thesis_findings_on_planted_data(thesis_study):
     findings = check_findings(study, n_boot=500)
     assert [f["finding"] for f in findings] == FINDINGS
     for f in findings:
-        assert f["mark"] in MARKS and f["rule"] and f["numbers"]
-    marks = {f["finding"]: f["mark"] for f in findings}
+        assert f["mark_by_rule"] in MARKS and f["rule"] and f["numbers"]
+        assert f["mark"] == (AT_SCALE if f["mark_by_rule"] in ("holds", "does not hold") else f["mark_by_rule"])
+    marks = {f["finding"]: f["mark_by_rule"] for f in findings}
     for key in ("jump_G_1-1", "jump_G_2-5", "fines_threshold", "gp_with_settlement", "vr_with_fines",
                 "fpa_stability", "breakage_low_no_trend"):
         assert marks[key] == "holds", (key, [f for f in findings if f["finding"] == key])
@@ -105,6 +109,43 @@ def test_findings_do_not_hold_when_planted_against(tmp_path, synth):
     assert _marks(study)["jump_G_1-1"] == "does not hold"      # same settlement everywhere
 
 
+def test_scale_rule_and_extent(thesis_study):
+    assert (scale.THESIS_CASES, scale.THESIS_CYCLES, scale.MIN_CASES, scale.MIN_CYCLES) == (10, 1000, 5, 100)
+    assert scale.far_below(2, 3) and scale.far_below(4, 1000) and scale.far_below(10, 99)
+    assert not scale.far_below(5, 100) and not scale.far_below(10, 1000)
+    _, study = thesis_study
+    assert scale.extent(study) == (4, 12)
+    run = study.cycles_run.values.copy()
+    run[2, 1], run[3, 0] = 0, 7                                  # a missing case, a short one
+    assert scale.extent(study.assign(cycles_run=(("database", "case"), run))) == (3, 7)
+    assert scale.extent(study.drop_vars("cycles_run").isel(cycle=slice(0, 5))) == (4, 5)
+
+
+@pytest.mark.parametrize("n_cases, n_cycles, mark", [(2, 3, AT_SCALE), (10, 1000, "does not hold")])
+def test_scale_decides_whether_marks_stand(synth, n_cases, n_cycles, mark):
+    dbs = {k: v for k, v in synth.THESIS.items() if k.startswith("G_1")}
+    study = synth.planted_study(np.random.default_rng(4), databases=dbs, n_cases=n_cases, n_cycles=n_cycles,
+                                jump=False)                     # same settlement everywhere: no jump
+    findings = check_findings(study, n_boot=500)
+    jump = findings[0]
+    assert (jump["finding"], jump["mark_by_rule"], jump["mark"]) == ("jump_G_1-1", "does not hold", mark)
+    small = n_cases < scale.THESIS_CASES
+    for f in findings:
+        decided = f["mark_by_rule"] in ("holds", "does not hold")
+        assert f["mark"] == (AT_SCALE if small and decided else f["mark_by_rule"]), f
+    md = report_markdown(optimise.context(study, n_boot=200), findings, [], {}, [],
+                         banner=scale_banner(study)).splitlines()
+    row = next(line for line in md if line.startswith("| jump_G_1-1 |"))
+    if small:
+        assert md[2].startswith("**Far below the thesis' scale.** This study ran 2 cases per database and 3 load "
+                                "cycles per case"), md[2]
+        assert "the thesis ran 10 cases per database and 1000 load cycles" in md[2]
+        assert "| **not decidable at this scale** (would be: does not hold) |" in row
+    else:
+        assert not any("Far below" in line for line in md) and md[2] == "## Ranking"
+        assert "| **does not hold** |" in row
+
+
 def test_report_and_cli(thesis_study, tmp_path, capsys):
     path, study = thesis_study
     p = argparse.ArgumentParser()
@@ -123,7 +164,16 @@ def test_report_and_cli(thesis_study, tmp_path, capsys):
     ranking = pd.read_csv(out / "ranking.csv", index_col=0)
     assert ranking["rank"].tolist() == list(range(1, 16))
     assert ranking.recommended.sum() == 3 and ranking.pareto.any()
-    assert len(json.loads((out / "findings.json").read_text())) == len(FINDINGS)
+    # 4 cases x 12 cycles: far below the thesis' scale, said at the top and in every decided mark
+    assert md.splitlines()[2].startswith("**Far below the thesis' scale.** This study ran 4 cases per database "
+                                         "and 12 load cycles per case")
+    assert "| **not decidable at this scale** (would be: holds) |" in md and "| **holds** |" not in md
+    findings = json.loads((out / "findings.json").read_text())
+    assert [f["finding"] for f in findings] == FINDINGS
+    assert pd.read_csv(out / "findings.csv")[["mark", "mark_by_rule"]].values.tolist() == [
+        [f["mark"], f["mark_by_rule"]] for f in findings]
+    assert {f["mark"] for f in findings} <= {AT_SCALE, "not decidable"}
+    assert "holds" in {f["mark_by_rule"] for f in findings}
     assert (out / "report.md.prov.json").is_file()
     assert not list(out.glob(".*tmp*"))
     args = p.parse_args(["study", "iri", str(path), "--out", str(tmp_path / "iri"), "--resamples", "200"])

@@ -13,7 +13,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ..atomic import atomic_path
-from . import stats
+from . import scale, stats
 
 # thesis abbreviation -> study.nc variable
 IRI_BEHAVIOURS = {"BS": "settlement", "BR": "breakage_rate", "GP": "ghost_particles", "FPA": "fpa",
@@ -45,15 +45,31 @@ def _fmt(v, digits=2):
     return "n/a" if not np.isfinite(v) else f"{v:.{digits}f}"
 
 
-def iri_markdown(table, n_boot, seed, min_abs_rho=stats.MIN_ABS_RHO):
+def scale_note(study):
+    """iri.md's opening line when the study is far below the thesis' scale, else "".
+
+    The verdicts are kept at any scale (unlike the findings of `optimise`): they state
+    correlations among these samples, not a thesis claim, and n, the bootstrap interval and
+    MIN_SAMPLES already carry the sample size. What would mislead is reading them as thesis
+    Table 5-2 (values after 1000 cycles), which the note warns against."""
+    cases, cycles = scale.extent(study)
+    if not scale.far_below(cases, cycles):
+        return ""
+    return (f"**Far below the thesis' scale.** {scale.describe(cases, cycles)} The verdicts describe these "
+            "samples only; they are not a check of thesis Table 5-2.")
+
+
+def iri_markdown(table, n_boot, seed, min_abs_rho=stats.MIN_ABS_RHO, note=""):
     rule = stats.VERDICT_RULE.replace(str(stats.MIN_ABS_RHO), f"{min_abs_rho:g}")
-    lines = ["# Interrelationship Index (IRI) of the behaviours (thesis 5.7, Table 5-2)", "",
-             "Samples: every (database, case) with both values finite. *final*: value at the last run "
-             "cycle; *change*: last minus first run cycle.",
-             f"Intervals: percentile bootstrap 95 %, {n_boot} resamples of the samples, seed {seed}.",
-             f"Verdict rule: {rule}.", "",
-             "Behaviours: BS settlement, BR breakage rate, GP ghost particles, FPA force propagation "
-             "angle (mean), VR void ratio.", ""]
+    lines = ["# Interrelationship Index (IRI) of the behaviours (thesis 5.7, Table 5-2)", ""]
+    if note:
+        lines += [note, ""]
+    lines += ["Samples: every (database, case) with both values finite. *final*: value at the last run "
+              "cycle; *change*: last minus first run cycle.",
+              f"Intervals: percentile bootstrap 95 %, {n_boot} resamples of the samples, seed {seed}.",
+              f"Verdict rule: {rule}.", "",
+              "Behaviours: BS settlement, BR breakage rate, GP ghost particles, FPA force propagation "
+              "angle (mean), VR void ratio.", ""]
     for kind in KINDS:
         lines += [f"## {kind} values", "",
                   "| IRI | n | Pearson r [95 % CI] | p | Spearman rho [95 % CI] | p | verdict |",
@@ -103,7 +119,7 @@ def write_iri(study, out_dir, n_boot=2000, seed=0, min_abs_rho=stats.MIN_ABS_RHO
     with atomic_path(paths[0]) as tmp:
         table.to_csv(tmp, index=False)
     with atomic_path(paths[1]) as tmp:
-        tmp.write_text(iri_markdown(table, n_boot, seed, min_abs_rho))
+        tmp.write_text(iri_markdown(table, n_boot, seed, min_abs_rho, scale_note(study)))
     with atomic_path(paths[2]) as tmp:
         fig_heatmap(table).savefig(tmp, format="png", dpi=130)
     return paths

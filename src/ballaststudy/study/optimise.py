@@ -1,6 +1,7 @@
 """The optimised ballast aggregate (thesis 5.8): per-database criteria, a ranking with
 settlement first, the Pareto set, the recommended databases, and the thesis' findings of
-ch. 5 checked one by one against our numbers (holds / does not hold / not decidable).
+ch. 5 checked one by one against our numbers (holds / does not hold / not decidable; a study
+far below the thesis' scale marks none of them holds or does not hold, see `scale`).
 
 Per-case quantities (one number per (database, case)) are averaged over cases; the spread
 over cases is carried as the standard error and, for the findings, as bootstrap intervals
@@ -9,7 +10,7 @@ that resample cases within each database (seeded)."""
 import numpy as np
 import pandas as pd
 
-from . import stats
+from . import scale, stats
 from .aggregate import database_order_key
 
 # name, variable, per-case quantity, better direction, meaning
@@ -147,10 +148,23 @@ def recommended(ranking):
 
 
 HOLDS, FAILS, UNDECIDED = "holds", "does not hold", "not decidable"
+UNDECIDED_AT_SCALE = "not decidable at this scale"
 
 
 def _finding(key, claim, mark, rule, numbers):
-    return {"finding": key, "claim": claim, "mark": mark, "rule": rule, "numbers": numbers}
+    # mark_by_rule: the rule's mark on these numbers; `mark` differs from it only below the thesis' scale
+    return {"finding": key, "claim": claim, "mark": mark, "mark_by_rule": mark, "rule": rule, "numbers": numbers}
+
+
+def _at_scale(findings, study):
+    """Far below the thesis' scale (scale.SCALE_RULE) a rule's holds / does not hold says
+    nothing about the thesis' findings after 1000 cycles over 10 cases: such marks become
+    UNDECIDED_AT_SCALE (mark_by_rule keeps them)."""
+    if scale.far_below(*scale.extent(study)):
+        for f in findings:
+            if f["mark"] in (HOLDS, FAILS):
+                f["mark"] = UNDECIDED_AT_SCALE
+    return findings
 
 
 def _three_way(lo, hi):
@@ -382,10 +396,10 @@ def context(study, n_boot=2000, seed=0):
 
 
 def check_findings(study, n_boot=2000, seed=0, ctx=None):
-    """The thesis' ch. 5 findings, each as dict(finding, claim, mark, rule, numbers)."""
+    """The thesis' ch. 5 findings, each as dict(finding, claim, mark, mark_by_rule, rule, numbers)."""
     ctx = ctx or context(study, n_boot, seed)
     final = {v: stats.final_value(study[v].values).ravel() for v in ("settlement", "ghost_particles", "void_ratio")}
-    return [
+    return _at_scale([
         _settlement_jump(ctx, "G_1-1"),
         _settlement_jump(ctx, "G_2-5"),
         _fines_finding(ctx),
@@ -399,4 +413,4 @@ def check_findings(study, n_boot=2000, seed=0, ctx=None):
         _fpa_finding(ctx),
         _breakage_finding(ctx, study),
         _optimum_finding(ctx),
-    ]
+    ], study)

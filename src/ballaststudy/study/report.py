@@ -9,7 +9,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ..atomic import atomic_path
-from . import optimise, plots
+from . import optimise, plots, scale
 
 
 def fig_fines_threshold(ctx):
@@ -58,11 +58,32 @@ def _md_table(df, columns):
     return lines
 
 
-def report_markdown(ctx, findings, pareto, recommend, figures, study_path=None, extent=""):
+def scale_banner(study):
+    """The report's opening paragraph when the study is far below the thesis' scale, else ""."""
+    cases, cycles = scale.extent(study)
+    if not scale.far_below(cases, cycles):
+        return ""
+    return (f"**Far below the thesis' scale.** {scale.describe(cases, cycles)} The thesis' findings are about "
+            f"the behaviour after {scale.THESIS_CYCLES} cycles averaged over {scale.THESIS_CASES} cases, so this "
+            f"run can neither confirm nor refute them: every finding whose rule gives holds or does not hold is "
+            f"marked \"{optimise.UNDECIDED_AT_SCALE}\" (what the rule gives is in brackets and in `mark_by_rule` "
+            f"of findings.csv/json). The ranking, Pareto set and figures describe this run only. Rule: "
+            f"{scale.SCALE_RULE}.")
+
+
+def _mark_cell(f):
+    if f["mark"] == f["mark_by_rule"]:
+        return f"**{f['mark']}**"
+    return f"**{f['mark']}** (would be: {f['mark_by_rule']})"
+
+
+def report_markdown(ctx, findings, pareto, recommend, figures, study_path=None, extent="", banner=""):
     ranking = ctx["ranking"]
     cols = ["rank", "database", "group", "tier_path", "settlement_final", "breakage_rate_final", "ghost_level",
             "ghost_variability", "fpa_level", "fpa_variability", "void_ratio_level", "void_ratio_variability"]
     lines = ["# The optimised ballast aggregate (thesis 5.8)", ""]
+    if banner:
+        lines += [banner, ""]
     if study_path:
         lines += [f"Data: `{study_path}`; bootstrap {ctx['n_boot']} resamples, seed {ctx['seed']}.", ""]
     if extent:
@@ -78,7 +99,7 @@ def report_markdown(ctx, findings, pareto, recommend, figures, study_path=None, 
               f"{', in the Pareto set' if d in pareto else ', not in the Pareto set'})" for g, d in recommend.items()]
     lines += ["", "## The thesis' findings against our numbers", "",
               "| finding | claim | mark | numbers |", "|---|---|---|---|"]
-    lines += [f"| {f['finding']} | {f['claim']} | **{f['mark']}** | {f['numbers']} |" for f in findings]
+    lines += [f"| {f['finding']} | {f['claim']} | {_mark_cell(f)} | {f['numbers']} |" for f in findings]
     lines += ["", "Rules:", ""] + [f"- `{f['finding']}`: {f['rule']}." for f in findings]
     lines += ["", "## Figures", "", f"Curves: mean over cases; bands: {plots.BAND}.", ""]
     lines += [f"![{p.stem}]({p.name})" for p in figures] + [""]
@@ -86,11 +107,11 @@ def report_markdown(ctx, findings, pareto, recommend, figures, study_path=None, 
 
 
 def _extent(study):
-    run = study["cycles_run"].values if "cycles_run" in study else None
-    cases = (run > 0).sum(axis=1) if run is not None else np.full(study.sizes["database"], study.sizes["case"])
+    run = scale.cycles_run(study)
+    cases = (run > 0).sum(axis=1)
     text = (f"{study.sizes['database']} databases, {int(cases.min())}-{int(cases.max())} cases each, "
             f"up to {study.sizes['cycle']} cycles")
-    if run is not None and (run > 0).any():
+    if (run > 0).any():
         text += f" (cases ran {int(run[run > 0].min())}-{int(run.max())} cycles)"
     return text + "."
 
@@ -117,7 +138,8 @@ def write_report(study, out_dir, n_boot=2000, seed=0, study_path=None):
             ("findings.csv", lambda p: pd.DataFrame(findings).to_csv(p, index=False)),
             ("findings.json", lambda p: p.write_text(json.dumps(findings, indent=1))),
             ("report.md", lambda p: p.write_text(report_markdown(ctx, findings, pareto, recommend, figures,
-                                                                 study_path, _extent(study))))):
+                                                                 study_path, _extent(study),
+                                                                 scale_banner(study))))):
         with atomic_path(out / name) as tmp:
             write(tmp)
         written.append(out / name)
