@@ -5,21 +5,35 @@ import sys
 
 from snakemake.utils import min_version, validate
 
-from ballaststudy.config import check_domain, database_seed, validate as validate_file, form_params, load_databases, select_databases
+from ballaststudy.config import ConfigError, check_domain, database_seed, validate as validate_file, form_params, load_databases, load_yaml, select_databases
 
 min_version("8.0")
+
+
+def stop(err):
+    """Bad input: our one line (file, key, allowed range), exit 2, no traceback."""
+    print(f"ballaststudy: error: {err}", file=sys.stderr)
+    sys.exit(2)
+
+
+CONFIG_FILE = (workflow.overwrite_configfiles or ["config/config.yaml"])[-1]
+try:  # a missing, binary or non-YAML config: our line before Snakemake's traceback
+    load_yaml(CONFIG_FILE)
+except ConfigError as err:
+    stop(err)
 
 
 configfile: "config/config.yaml"
 
 
-CONFIG_FILE = (workflow.overwrite_configfiles or ["config/config.yaml"])[-1]
-# our one-line message (file, key, allowed range) first, then Snakemake's own validation
-# against the same schema (it also fills the defaults)
-check_domain(validate_file(config, "config", CONFIG_FILE), CONFIG_FILE)
+# our one-line message first, then Snakemake's own validation against the same schema
+try:
+    check_domain(validate_file(config, "config", CONFIG_FILE), CONFIG_FILE)
+    DATABASES = load_databases(config["databases_file"], form_params(config))
+    NAMES = select_databases(config, DATABASES, CONFIG_FILE)
+except ConfigError as err:
+    stop(err)
 validate(config, "workflow/schemas/config.schema.yaml")
-DATABASES = load_databases(config["databases_file"], form_params(config))
-NAMES = select_databases(config, DATABASES, CONFIG_FILE)
 RESULTS = config["results_dir"]
 
 

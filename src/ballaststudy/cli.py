@@ -6,14 +6,15 @@ import sys
 from pathlib import Path
 
 import pandas as pd
-import xarray as xr
 from tqdm import tqdm
 
+from .atomic import atomic_path
 from .config import ConfigError, database_seed, form_params, load_config, load_databases, select_databases
-from .forms.evaluate import MeshError, evaluate_stl
+from .forms.evaluate import MeshError, evaluate_stl, units_warning
 from .forms.generator import GenerationError
 from .forms.objective import ObjectiveError
 from .forms.validate import SUMMARY_COLUMNS, validation_row
+from .inputs import input_dir, input_file, open_netcdf, writable_dir, writable_file
 from .bpm.cli import register as register_bpm
 from .measured.cli import register as register_measured
 from .rig.cli import register as register_case
@@ -21,6 +22,7 @@ from .study.cli import register as register_study
 
 
 def _forms_generate(args):
+    writable_dir(args.out)
     cfg = load_config(args.config)
     params = form_params(cfg)
     databases = load_databases(cfg["databases_file"], params)
@@ -38,18 +40,13 @@ def _forms_generate(args):
             tqdm.write(f"wrote {nc}")
 
 
-def _open(path):
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(path, None, "file not found")
-    with xr.open_dataset(path) as ds:
-        return ds.load()
-
-
 def _forms_validate(args):
-    rows = [validation_row(_open(p)) for p in args.files]
     if args.csv:
-        pd.DataFrame(rows).to_csv(args.csv, index=False)
+        writable_file(args.csv)
+    rows = [validation_row(open_netcdf(p, "forms")) for p in args.files]
+    if args.csv:
+        with atomic_path(args.csv) as tmp:
+            pd.DataFrame(rows).to_csv(tmp, index=False)
     if args.json:
         print(json.dumps(rows, indent=1))
     else:
@@ -59,14 +56,20 @@ def _forms_validate(args):
 
 
 def _forms_evaluate(args):
-    print(json.dumps(evaluate_stl(args.stl, args.density), indent=1))
+    result = evaluate_stl(args.stl, args.density, args.units)
+    warning = units_warning(args.stl, result)
+    if warning:     # a wrong --units still gives numbers (off by 1000): warn, do not fail
+        print(f"ballaststudy: warning: {warning}", file=sys.stderr)
+    print(json.dumps(result, indent=1))
 
 
 def _forms_report(args):
     from .forms.report import write_report
     from .provenance import Recorder
+    writable_dir(args.out)
+    databases = [open_netcdf(p, "forms") for p in args.files]
     recorder = Recorder("forms report", inputs=args.files, params={"stones": args.stones, "seed": args.seed})
-    paths = write_report([_open(p) for p in args.files], args.out, args.stones, args.seed)
+    paths = write_report(databases, args.out, args.stones, args.seed)
     recorder.finish()
     for path in paths:
         if str(path).endswith(".csv"):
@@ -76,13 +79,17 @@ def _forms_report(args):
 
 def _provenance_show(args):
     from .provenance.store import lineage, load_records
-    print("\n".join(lineage(args.file, load_records(args.results))))
+    records = load_records(input_dir(args.results, "expected the results folder"))
+    if str(Path(args.file)) not in records:     # an output with a record may be gone: still show it
+        input_file(args.file, f"expected an output file or one recorded under {args.results}")
+    print("\n".join(lineage(args.file, records)))
 
 
 def _provenance_verify(args):
     from .provenance.store import load_records, verify, write_store
-    records = load_records(args.results)
-    write_store(args.results, Path(args.results) / "provenance" / "store.json")
+    records = load_records(input_dir(args.results, "expected the results folder"))
+    store = writable_file(Path(args.results) / "provenance" / "store.json")
+    write_store(args.results, store)
     problems = verify(records)
     for path, what in problems:
         print(f"{path}: {what}")
@@ -92,10 +99,15 @@ def _provenance_verify(args):
 
 
 def _config_check(args):
+    """What the workflow reads before any job: the config, its databases, the measured tests."""
+    from .measured.importer import load_conditions
     cfg = load_config(args.config)
     dbs = load_databases(cfg["databases_file"], form_params(cfg))
     names = select_databases(cfg, dbs, args.config)
-    print(f"{args.config}: ok ({len(names)} databases: {', '.join(names)})")
+    tests = sorted(Path(cfg["measured"]["tests_dir"]).rglob("*.yaml"))
+    for test in tests:
+        load_conditions(test)
+    print(f"{args.config}: ok ({len(names)} databases: {', '.join(names)}; {len(tests)} measured tests)")
 
 
 def build_parser():
@@ -120,7 +132,10 @@ def build_parser():
 
     e = fs.add_parser("evaluate", help="a, b, c, volume, group and flags of one STL stone")
     e.add_argument("stl", metavar="STONE.stl")
-    e.add_argument("--density", type=float, metavar="KG_M3", help="give the mass too")
+    # --density and --units are checked by evaluate_stl, for a one-line error like every other
+    e.add_argument("--density", metavar="KG_M3", help="give the mass too (kg/m3, finite and > 0)")
+    e.add_argument("--units", default="mm", metavar="mm|m",
+                   help="unit of the file's coordinates and of the output keys (default mm, as scans and EN 933)")
     e.set_defaults(func=_forms_evaluate)
 
     r = fs.add_parser("report", help="figures like thesis Figs. 3-9 ... 3-16")
@@ -158,7 +173,7 @@ def main(argv=None):
     try:
         args.func(args)
     except (ConfigError, ObjectiveError, GenerationError, MeshError) as err:
-        print(f"ballaststudy: error: {err}", file=sys.stderr)
+        print("ballaststudy: error: " + " ".join(str(err).splitlines()), file=sys.stderr)  # one line
         return 2
     return 0
 

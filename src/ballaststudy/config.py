@@ -4,84 +4,10 @@ allowed range in one line."""
 
 import copy
 import zlib
-from importlib import resources
-from pathlib import Path
-
-import jsonschema
-import yaml
 
 from .forms.objective import FormParams, ObjectiveError, build_objective
+from .schema import ConfigError, fill_defaults, load_schema, load_yaml, schema_path, validate  # noqa: F401 (re-exported)
 
-
-class ConfigError(ValueError):
-    """Bad input: `file: key: message`."""
-
-    def __init__(self, file, key, message):
-        super().__init__(f"{file}: {key}: {message}" if key else f"{file}: {message}")
-        self.file, self.key = str(file), key
-
-
-def schema_path(name):
-    """Path of a packaged schema, e.g. schema_path('config')."""
-    return Path(resources.files("ballaststudy") / "schemas" / f"{name}.schema.yaml")
-
-
-def _key(path):
-    out = ""
-    for p in path:
-        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
-    return out or "(top level)"
-
-
-def _describe(error):
-    """jsonschema's message with the allowed range spelled out."""
-    s = error.schema if isinstance(error.schema, dict) else {}
-    lo = s.get("minimum", s.get("exclusiveMinimum"))
-    hi = s.get("maximum", s.get("exclusiveMaximum"))
-    if error.validator in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"):
-        lo_s = "" if lo is None else (f"> {lo}" if "exclusiveMinimum" in s else f">= {lo}")
-        hi_s = "" if hi is None else (f"< {hi}" if "exclusiveMaximum" in s else f"<= {hi}")
-        return f"{error.instance!r} is out of range; allowed: {' and '.join(x for x in (lo_s, hi_s) if x)}"
-    if error.validator == "oneOf":
-        # a value of the right kind but out of range: report that, not the choice of kinds
-        inner = [c for c in error.context if c.validator != "type"]
-        if inner:
-            return _describe(max(inner, key=lambda c: len(c.absolute_path)))
-        return f"{error.instance!r} is not allowed here; {error.schema.get('description', 'see the schema')}"
-    return error.message
-
-
-def validate(data, schema_name, file):
-    """Validate against a packaged schema, filling its defaults; raise ConfigError on the first error."""
-    schema = yaml.safe_load(schema_path(schema_name).read_text())
-    validator = jsonschema.Draft202012Validator(schema)
-    errors = sorted(validator.iter_errors(data), key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
-    if errors:
-        e = errors[0]
-        inner = [c for c in (e.context or []) if c.validator != "type"]
-        where = max(inner, key=lambda c: len(c.absolute_path)) if e.validator == "oneOf" and inner else e
-        raise ConfigError(file, _key(where.absolute_path), _describe(e))
-    _fill_defaults(data, schema)
-    return data
-
-
-def _fill_defaults(data, schema):
-    for key, sub in schema.get("properties", {}).items():
-        if isinstance(sub, dict) and "default" in sub and key not in data:
-            data[key] = copy.deepcopy(sub["default"])
-        if isinstance(sub, dict) and isinstance(data.get(key), dict) and sub.get("type") == "object":
-            _fill_defaults(data[key], sub)
-
-
-def load_yaml(path):
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(path, None, "file not found")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as err:
-        raise ConfigError(path, None, f"not valid YAML: {err}") from None
-    return {} if data is None else data
 
 
 def load_config(path):
@@ -89,25 +15,54 @@ def load_config(path):
     cfg = validate(load_yaml(path), "config", path)
     if cfg.get("forms") is None:
         cfg["forms"] = {}
-    _fill_defaults(cfg["forms"], yaml.safe_load(schema_path("config").read_text())["properties"]["forms"])
+    fill_defaults(cfg["forms"], load_schema("config")["properties"]["forms"])
     return check_domain(cfg, path)
 
 
+# (section, lower key, upper key, strictly below): pairs of bounds the schema cannot relate
+ORDERED_PAIRS = (
+    ("rig.box.loading", "cyclic_min_kN", "cyclic_max_kN", True),
+    ("rig.box.loading", "cyclic_v_min_m_s", "cyclic_v_max_m_s", False),
+    ("rig.box.assembly", "plate_width_m", "width_m", False),
+    ("rig.biaxial.loading", "deviator_min_kPa", "deviator_max_kPa", True),
+    ("rig.biaxial.loading", "platen_v_min_m_s", "platen_v_max_m_s", False),
+    ("bpm", "radius_min_mm", "radius_max_mm", False),
+)
+
+
+def _section(cfg, dotted):
+    for part in dotted.split("."):
+        cfg = (cfg or {}).get(part) or {}
+    return cfg
+
+
+def _default(section, key):
+    """The value a stage uses for a key the config leaves out (its params class' default)."""
+    from dataclasses import fields
+    if section == "bpm":
+        from .bpm.params import BpmParams
+        d = {f.name: f.default for f in fields(BpmParams)}
+        return d[key.removesuffix("_mm")] * 1e3 if key.endswith("_mm") else d.get(key)
+    if section.startswith("rig.biaxial"):
+        from .rig.biaxial import BiaxialParams as cls
+    else:
+        from .rig.params import RigParams as cls
+    return {f.name: f.default for f in fields(cls)}.get(key)
+
+
 def check_domain(cfg, file):
-    """Checks across keys that a schema cannot state; ConfigError naming key and range."""
-    loading = ((cfg.get("rig") or {}).get("box") or {}).get("loading") or {}
-    key = "rig.box.loading."
-    lo, hi = loading.get("cyclic_min_kN"), loading.get("cyclic_max_kN")
-    if lo is not None and hi is not None and not lo < hi:
-        raise ConfigError(file, key + "cyclic_min_kN",
-                          f"{lo:g} kN must be below {key}cyclic_max_kN ({hi:g} kN)")
-    loads = loading.get("static_loads_kN") or []
+    """Checks across keys that a schema cannot state (on the values the stages will use,
+    defaults included); ConfigError naming key and range."""
+    for section, lo_key, hi_key, strict in ORDERED_PAIRS:
+        sec = _section(cfg, section)
+        lo, hi = (sec.get(k, _default(section, k)) for k in (lo_key, hi_key))
+        if lo is not None and hi is not None and not (lo < hi if strict else lo <= hi):
+            relation = "below" if strict else "at most"
+            raise ConfigError(file, f"{section}.{lo_key}",
+                              f"{lo:g} must be {relation} {section}.{hi_key} ({hi:g})")
+    loads = _section(cfg, "rig.box.loading").get("static_loads_kN") or []
     if any(b <= a for a, b in zip(loads, loads[1:])):
-        raise ConfigError(file, key + "static_loads_kN", f"{loads} must increase step by step")
-    bpm = cfg.get("bpm") or {}
-    rmin, rmax = bpm.get("radius_min_mm"), bpm.get("radius_max_mm")
-    if rmin is not None and rmax is not None and not rmin <= rmax:
-        raise ConfigError(file, "bpm.radius_min_mm", f"{rmin:g} mm must not exceed bpm.radius_max_mm ({rmax:g} mm)")
+        raise ConfigError(file, "rig.box.loading.static_loads_kN", f"{loads} must increase step by step")
     return cfg
 
 

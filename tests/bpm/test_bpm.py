@@ -212,7 +212,7 @@ def test_bad_input_gives_a_clear_error(tmp_path):
         load_library(other)
     bad_cfg = tmp_path / "c.yaml"
     bad_cfg.write_text("seed: 1\ndatabases_file: x\ndatabases: all\nforms: {}\nbpm: {porosity: 0.9}\n")
-    with pytest.raises(ConfigError, match=r"bpm.porosity: 0.9 is out of range"):
+    with pytest.raises(ConfigError, match=r"bpm.porosity: 0.9 is not allowed; allowed: a number >= 0.05 and <= 0.5"):
         _run_cli(["bpm", "build", str(other), "--out", str(tmp_path / "o.nc"), "--config", str(bad_cfg)])
     assert not (tmp_path / "o.nc").exists()
 

@@ -124,7 +124,7 @@ def test_generate_writes_database_files(tmp_path, capsys):
                                    args=("ok",))
     assert rc == 0, err
     made = sorted(p.name for p in out.iterdir())
-    assert made == ["ok.nc", "ok.nc.prov.json", "ok.stl.zip"], made
+    assert made == ["ok.nc", "ok.nc.prov.json", "ok.stl.zip", "ok.stl.zip.prov.json"], made
 
 
 def test_good_config_check(tmp_path, capsys):
@@ -165,11 +165,12 @@ def test_evaluate_closed_cube(tmp_path, capsys, inward):
         cube = trimesh.Trimesh(cube.vertices, cube.faces[:, ::-1], process=False)
     path = tmp_path / "cube.stl"
     cube.export(path)
-    rc = main(["forms", "evaluate", str(path), "--density", "2700"])
+    rc = main(["forms", "evaluate", str(path), "--density", "2700", "--units", "m"])
     cap = capsys.readouterr()
     assert rc == 0, cap.err
     got = json.loads(cap.out)
     # the rotated corners are rounded to float32 in the STL: relative 1e-6
+    assert got["units"] == "m" and cap.err == ""
     expected = {"a_m": s * np.sqrt(3), "b_m": s * np.sqrt(8 / 3), "c_m": s * np.sqrt(2), "volume_m3": s**3,
                 "mass_kg": 2700 * s**3, "a_over_c": np.sqrt(1.5)}
     for k, v in expected.items():

@@ -4,6 +4,7 @@ import hashlib
 import json
 
 import pytest
+import yaml
 
 from ballaststudy.cli import main
 from ballaststudy.provenance import Recorder
@@ -53,3 +54,35 @@ def test_record_holds_hashes_params_seed_versions(tmp_path):
     assert rec["package"]["name"] == "ballaststudy" and rec["libraries"]["numpy"]
     assert rec["started"] <= rec["finished"]
     assert rec["output"][str(out)] == hashlib.sha256(b"O").hexdigest()
+
+
+def _verify(results, capsys):
+    """(exit code, stdout) of `ballaststudy provenance verify`."""
+    try:
+        rc = main(["provenance", "verify", "--results", str(results)])
+    except SystemExit as stop:
+        rc = stop.code
+    return rc, capsys.readouterr().out
+
+
+def test_verify_covers_the_stl_archive_of_forms_generate(tmp_path, capsys):
+    db_file = tmp_path / "dbs.yaml"
+    db_file.write_text(yaml.safe_dump({"databases": {"tiny": {
+        "mass_kg": 3, "grading": "G_CRB B", "shape_index": 30, "particle_length_index": 0,
+        "materials": {"hard": {"mass_fraction": 1.0, "density_kg_m3": 2700}}}}}))
+    cfg = tmp_path / "config.yaml"
+    cfg.write_text(yaml.safe_dump({"seed": 7, "databases_file": str(db_file), "databases": "all", "forms": {}}))
+    results = tmp_path / "results"
+    assert main(["forms", "generate", "--all", "--out", str(results / "forms"), "--config", str(cfg),
+                 "--quiet"]) == 0
+    archive = results / "forms" / "tiny.stl.zip"
+    assert _verify(results, capsys)[0] == 0
+
+    archive.write_bytes(archive.read_bytes() + b"\0")
+    rc, out = _verify(results, capsys)
+    assert rc == 1 and f"{archive}: output changed after it was written" in out, out
+
+    archive.unlink()
+    rc, out = _verify(results, capsys)
+    assert rc == 1 and f"{archive}: output missing" in out, out
+    assert "tiny.nc:" not in out, f"only the archive is at fault: {out}"

@@ -4,6 +4,7 @@ import json
 import numpy as np
 import pytest
 
+from ballaststudy.config import ConfigError
 from ballaststudy.rig.library import LibraryError, Library, load_library, synthetic_library
 
 
@@ -39,7 +40,9 @@ def test_bad_library_names_file_and_variable(tmp_path):
     ds = synthetic_library(2, r0=0.006, seed=1).drop_vars("bond_i")
     p = tmp_path / "bad.nc"
     ds.to_netcdf(p)
-    with pytest.raises(LibraryError, match="bad.nc.*bond_i"):
+    with pytest.raises(ConfigError, match="bad.nc.*bond_i"):
         load_library(p)
-    with pytest.raises(LibraryError, match="file not found"):
+    with pytest.raises(LibraryError, match="bad.nc: bond_i: variable missing"):
+        Library(ds, p)
+    with pytest.raises(ConfigError, match="file not found"):
         load_library(tmp_path / "missing.nc")

@@ -100,13 +100,39 @@ def test_editing_form_settings_reruns_every_database(study):
     ("config.yaml", lambda c: _loading(c).update(cyclic_min_kN=50.0),
      "rig.box.loading.cyclic_min_kN"),
     ("config.yaml", lambda c: c["rig"]["box"]["assembly"].update(cycles=5),
-     "rig.box.assembly"),
+     "rig.box.assembly.cycles"),
+    # the issue's examples: NaN / Inf blamed on the right file and key
+    ("config.yaml", lambda c: c["bpm"].update(porosity=float("nan")), "bpm.porosity"),
+    ("config.yaml", lambda c: c["forms"].update(ab_ratio_max=float("nan")), "forms.ab_ratio_max"),
+    ("config.yaml", lambda c: _loading(c).update(static_loads_kN=[10.0, float("inf")]),
+     "rig.box.loading.static_loads_kN[1]"),
+    ("databases.yaml", lambda d: d["defaults"].update(mass_kg=float("inf")), "defaults.mass_kg"),
+    ("config.yaml", lambda c: _loading(c).update(cycels=5), "rig.box.loading.cycels: unknown key; did you mean 'cycles'"),
+    ("config.yaml", lambda c: _loading(c).update(cycles="ten"), "rig.box.loading.cycles: 'ten' is not allowed; "
+     "allowed: an integer >= 1"),
+    ("config.yaml", lambda c: c.clear(), "seed: missing"),
 ])
 def test_bad_config_is_rejected_before_any_job(study, file, change, key):
+    """One line naming file and key, exit 2, no traceback (Snakemake shows our message)."""
     with _edited(study / "config" / file, change):
         out = subprocess.run(["snakemake", "--cores", "1", "-n"], cwd=study, capture_output=True, text=True)
-    assert out.returncode != 0
-    assert f"{file}: {key}" in out.stdout + out.stderr, out.stdout + out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert out.returncode == 2, out.stdout + out.stderr
+    assert len(lines) == 1 and lines[0].startswith("ballaststudy: error: "), out.stderr
+    assert f"{file}: {key}" in lines[0], out.stderr
+
+
+@pytest.mark.parametrize("content", [b"seed: [1,\n", b"\x00\xff\xfe binary"])
+def test_unreadable_config_file_is_one_line(study, content):
+    path = study / "config" / "config.yaml"
+    saved = path.read_bytes()
+    try:
+        path.write_bytes(content)
+        out = subprocess.run(["snakemake", "--cores", "1", "-n"], cwd=study, capture_output=True, text=True)
+    finally:
+        path.write_bytes(saved)
+    assert out.returncode == 2 and out.stderr.strip().count("\n") == 0, out.stderr
+    assert out.stderr.startswith("ballaststudy: error: config/config.yaml: not ")
 
 
 def test_slurm_profile_dry_run(study):

@@ -11,7 +11,10 @@ MEASURED_DATA_DIR = Path(config["measured"]["data_dir"])
 MEASURED_TESTS = sorted(str(p.relative_to(MEASURED_TESTS_DIR).with_suffix(""))
                         for p in MEASURED_TESTS_DIR.rglob("*.yaml"))
 for _test in MEASURED_TESTS:        # one line naming file and key before any job
-    load_conditions(MEASURED_TESTS_DIR / f"{_test}.yaml")
+    try:
+        load_conditions(MEASURED_TESTS_DIR / f"{_test}.yaml")
+    except ConfigError as err:
+        stop(err)
 MEASURED_AVAILABLE = MEASURED_DATA_DIR.is_dir() or not MEASURED_TESTS
 if not MEASURED_AVAILABLE:
     print(f"note: measured.data_dir {MEASURED_DATA_DIR} not found: the {len(MEASURED_TESTS)} "

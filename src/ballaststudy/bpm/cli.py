@@ -6,6 +6,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..config import ConfigError, job_seed, load_config
+from ..inputs import writable_file
 
 
 def bpm_seed(study_seed, database):
@@ -17,6 +18,7 @@ def bpm_seed(study_seed, database):
 def _bpm_build(args):
     from .library import build_library, open_forms   # numba engine only when building
     from .params import BpmParams
+    writable_file(args.out)
     cfg = load_config(args.config)
     try:
         params = BpmParams.from_config(cfg.get("bpm"))

@@ -2,7 +2,6 @@
 choosing the stones of a limited library, reading it back. Format: see ``ballaststudy.bpm``."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -10,6 +9,7 @@ import xarray as xr
 from ..atomic import atomic_path
 from ..config import ConfigError
 from ..forms.database import stone_profiles
+from ..inputs import open_netcdf
 from ..provenance import Recorder
 from . import packing
 from .build import build_stones
@@ -21,27 +21,9 @@ LIBRARY_VARIABLES = ("form_index", "material", "ball_count", "bond_count", "ball
                      "ball_radius", "bond_i", "bond_j", "bond_gap")
 
 
-def _open_checked(path, required, kind, hint=""):
-    """The netCDF at `path`, loaded; ConfigError (one line) if missing, unreadable or lacking
-    one of the `required` variables."""
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(path, None, "file not found")
-    try:
-        with xr.open_dataset(path) as ds:
-            ds = ds.load()
-    except (OSError, ValueError) as err:
-        raise ConfigError(path, None, f"not a netCDF file ({type(err).__name__})") from None
-    missing = [v for v in required if v not in ds]
-    if missing:
-        raise ConfigError(path, None, f"not {kind}: no variable {missing[0]!r}{hint}")
-    return ds
-
-
 def open_forms(path):
     """The forms netCDF, loaded and checked; ConfigError (one line) if it is not one."""
-    ds = _open_checked(path, FORMS_VARIABLES, "a form database",
-                       " (make one with 'ballaststudy forms generate')")
+    ds = open_netcdf(path, "forms", require=FORMS_VARIABLES)
     meanings = ds.material.attrs.get("flag_meanings", "")
     if meanings.split() != list(MATERIAL_NAMES):
         raise ConfigError(path, "material", f"flag_meanings {meanings!r}; expected 'hard soft'")
@@ -216,7 +198,7 @@ def build_library(forms_path, out_path, params, seed, config_files=(), progress=
 
 def load_library(path):
     """The BPM library Dataset (loaded); ConfigError if missing or not a library."""
-    return _open_checked(path, LIBRARY_VARIABLES, "a BPM library")
+    return open_netcdf(path, "bpm", require=LIBRARY_VARIABLES)
 
 
 def _offsets(counts):

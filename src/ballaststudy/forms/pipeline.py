@@ -17,7 +17,8 @@ def output_paths(out_dir, name):
 
 def generate_database(name, definition, seed, params, out_dir, config_files=(), progress=None):
     """Generate database `name` and write `<out_dir>/<name>.nc` and `.stl.zip` (atomically,
-    only after the whole database succeeded). Returns the netCDF path."""
+    only after the whole database succeeded), each with its `.prov.json` record. Returns the
+    netCDF path."""
     recorder = Recorder("forms generate", inputs=config_files,
                         params={"database": name, "definition": definition, "forms": params.__dict__},
                         seed=seed)
@@ -30,7 +31,9 @@ def generate_database(name, definition, seed, params, out_dir, config_files=(), 
     with atomic_path(stl) as stl_tmp, atomic_path(nc) as nc_tmp:
         write_stl_archive(ds, stl_tmp)
         write_netcdf(ds, nc_tmp)
+    # one record per output, so `provenance verify` also notices a deleted or edited archive
     recorder.write_beside(nc)
+    recorder.write_beside(stl)
     return nc
 
 

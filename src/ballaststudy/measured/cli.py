@@ -3,11 +3,15 @@ to one netCDF. Bad input raises ConfigError (file[:line], key, what is allowed),
 one line with exit code 2; nothing is written then."""
 from pathlib import Path
 
+from ..inputs import input_dir, writable_file
 from ..provenance import Recorder
 from .importer import curve_files, measured_dataset, write_test
 
 
 def _import(args):
+    writable_file(args.out)
+    if args.data_dir:
+        input_dir(args.data_dir, "expected the folder of the curve files")
     ds = measured_dataset(args.conditions, args.data_dir)     # every check before any output
     recorder = Recorder("measured import",
                         inputs=[args.conditions, *curve_files(args.conditions, args.data_dir)],
@@ -21,8 +25,9 @@ def _import(args):
 
 def _compare(args):
     from .compare import write_comparison
-    ds = write_comparison(args.measured, args.cases, args.out,
-                          figure=None if args.no_figure else args.out.with_suffix(".png"))
+    out = writable_file(args.out)
+    figure = None if args.no_figure else writable_file(out.with_suffix(".png"))
+    ds = write_comparison(args.measured, args.cases, out, figure=figure)
     if not args.quiet:
         print(f"wrote {args.out}: {ds.sizes['case']} simulated cases on {ds.sizes['cycle']} cycles")
 

@@ -11,21 +11,15 @@ import xarray as xr
 
 from ..atomic import atomic_path
 from ..config import ConfigError
+from ..inputs import open_netcdf
 from ..metrics.output import VARIABLES
 
 QUANTITIES = ("axial_strain", "volumetric_strain")
 
 
-def _open(path):
-    if not Path(path).is_file():
-        raise ConfigError(path, None, "file not found")
-    with xr.open_dataset(path) as ds:
-        return ds.load()
-
-
 def compare_dataset(measured_path, case_paths):
-    measured = _open(measured_path)
-    cases = [_open(p) for p in case_paths]
+    measured = open_netcdf(measured_path, "measured")
+    cases = [open_netcdf(p, "metrics") for p in case_paths]
     for p, ds in zip(case_paths, cases):
         if "axial_strain" not in ds:
             raise ConfigError(p, "axial_strain", "not a biaxial case's metrics.nc")

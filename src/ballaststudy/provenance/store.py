@@ -7,14 +7,34 @@ config files; `verify()` re-hashes every input and output and says what is stale
 import json
 from pathlib import Path
 
+from ..atomic import atomic_path
+from ..config import ConfigError
+from ..inputs import input_file
 from .record import sha256_file
+
+_RECORD = "expected a provenance record (JSON written beside each output)"
+_KEYS = ("step", "output", "params_sha256", "package", "finished")   # what lineage/verify read
+
+
+def _read_record(side):
+    """One sidecar record; ConfigError (one line) if it is not one."""
+    try:
+        rec = json.loads(input_file(side, _RECORD).read_bytes())
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise ConfigError(side, None, f"not valid JSON ({type(err).__name__}); {_RECORD}") from None
+    if not isinstance(rec, dict):
+        raise ConfigError(side, None, f"JSON but not a record (not a mapping); {_RECORD}")
+    lacks = [k for k in _KEYS if k not in rec]
+    if lacks:
+        raise ConfigError(side, None, f"JSON but not a record (no key {lacks[0]!r}); {_RECORD}")
+    return rec
 
 
 def load_records(results_dir):
     """{output path: record} for every sidecar record under results_dir."""
     out = {}
     for side in sorted(Path(results_dir).rglob("*.prov.json")):
-        rec = json.loads(side.read_text())
+        rec = _read_record(side)
         for path in rec.get("output", {}):
             out[str(Path(path))] = rec
     return out
@@ -23,8 +43,8 @@ def load_records(results_dir):
 def write_store(results_dir, path):
     """All records in one JSON file (list), for people and tools that want a single file."""
     records = load_records(results_dir)
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    Path(path).write_text(json.dumps(list(records.values()), indent=1, sort_keys=True))
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(list(records.values()), indent=1, sort_keys=True))
     return path
 
 

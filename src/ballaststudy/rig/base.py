@@ -11,6 +11,7 @@ import xarray as xr
 
 from ..atomic import atomic_path
 from ..dem import Simulation
+from ..inputs import open_netcdf
 
 
 class Rig:
@@ -122,8 +123,12 @@ class Rig:
 
     @classmethod
     def load(cls, path):
-        with xr.open_dataset(path) as ds:
-            data = np.asarray(ds["engine_checkpoint"].values, np.uint8).tobytes()
-            lay = cls.Layout(**json.loads(ds.attrs["rig_layout_json"]))
-            prm = cls.Params(**json.loads(ds.attrs["rig_params_json"]))
-        return cls(cls.sim_from_bytes(data, path), lay, prm)
+        return cls.from_dataset(open_netcdf(path, "assembled"), path)
+
+    @classmethod
+    def from_dataset(cls, ds, source="assembled case"):
+        """From a loaded assembled-case Dataset (the file's content, see ``to_dataset``)."""
+        data = np.asarray(ds["engine_checkpoint"].values, np.uint8).tobytes()
+        lay = cls.Layout(**json.loads(ds.attrs["rig_layout_json"]))
+        prm = cls.Params(**json.loads(ds.attrs["rig_params_json"]))
+        return cls(cls.sim_from_bytes(data, source), lay, prm)

@@ -13,6 +13,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..config import ConfigError, load_config
+from ..inputs import open_netcdf, writable_dir, writable_file
 from ..provenance import Recorder
 from .params import RigParams, case_seed
 
@@ -30,23 +31,14 @@ def _params(args, kind=None):
     return cfg, RigParams.from_config(cfg.get("rig", {}))
 
 
-def _rig_kind(path):
-    """The rig an assembled file holds (files from before the biaxial rig: the box)."""
-    import xarray as xr
-    with xr.open_dataset(path) as ds:
-        return str(ds.attrs.get("rig_kind", "box"))
-
-
 def _case_assemble(args):
     from .assembly import assemble
     from .biaxial import assemble_biaxial
-    from .library import LibraryError, load_library
+    from .library import load_library
+    writable_file(args.out)
     cfg, params = _params(args)
     assemble = assemble_biaxial if _kind(args, cfg) == "biaxial" else assemble
-    try:
-        lib = load_library(args.library)
-    except LibraryError as err:
-        raise ConfigError(args.library, None, str(err)) from None
+    lib = load_library(args.library)
     seed = args.seed if args.seed is not None else case_seed(cfg["seed"], lib.database, args.case)
     recorder = Recorder("case assemble", inputs=(args.library, args.config),
                         params={"case": args.case, "rig": params.to_dict()}, seed=seed)
@@ -98,11 +90,10 @@ def _measured_conditions(args, kind, params):
 
 
 def _case_run(args):
-    out = Path(args.out)
-    ckpt = out.with_name(out.stem + ".checkpoint.npz")
-    if not Path(args.assembled).is_file():
-        raise ConfigError(args.assembled, None, "file not found")
-    kind = _rig_kind(args.assembled)
+    out = writable_file(args.out)
+    ckpt = writable_file(out.with_name(out.stem + ".checkpoint.npz"))
+    assembled = open_netcdf(args.assembled, "assembled")
+    kind = str(assembled.attrs.get("rig_kind", "box"))     # files from before the biaxial rig: box
     rig_class, run_class, write_outputs = _rig_classes(kind)
     cfg, params = _params(args, kind)
     if args.conditions or args.mode:
@@ -118,13 +109,13 @@ def _case_run(args):
             print(f"resuming from {ckpt} (cycle {run.s.cycle}, step {run.rig.sim.step})")
     else:
         try:
-            rig = rig_class.load(args.assembled)
-        except (ValueError, KeyError, OSError) as err:
+            rig = rig_class.from_dataset(assembled, "engine_checkpoint")
+        except (ValueError, KeyError, TypeError) as err:
             raise ConfigError(args.assembled, None, f"not an assembled case ({err})") from None
         rig.params = params
         run = run_class(rig, args.cycles, checkpoint=ckpt,
                         checkpoint_every=args.checkpoint_every, metrics=cfg.get("metrics"))
-    vtk_dir = None if args.no_vtk else out.with_name("vtk")
+    vtk_dir = None if args.no_vtk else writable_dir(out.with_name("vtk"))
     if vtk_dir is not None:
         from .vtk import vtk_hook
         run.hooks.append(vtk_hook(vtk_dir, params.vtk_cycles, args.cycles))

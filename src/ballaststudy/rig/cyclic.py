@@ -16,6 +16,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from ..config import ConfigError
+from ..inputs import open_checkpoint
 from ..dem.control import PEAK, TROUGH, WINDOW
 
 
@@ -184,8 +185,7 @@ class CyclicRun:
     @classmethod
     def from_checkpoint(cls, path, rig_class, cycles=None, **kwargs):
         """The run saved in ``path`` (its metrics settings come with it)."""
-        with np.load(path, allow_pickle=False) as z:
-            d = {k: z[k] for k in z.files}
+        d = open_checkpoint(path)
         try:
             rig = rig_class.from_parts(d["engine"].tobytes(), json.loads(str(d["layout"])),
                                        json.loads(str(d["params"])), path)
@@ -193,14 +193,14 @@ class CyclicRun:
                       resumed=True, **kwargs)
             run.s = cls.State(**json.loads(str(d["state"])))
             run.control.load(d)
-        except (KeyError, TypeError) as err:
+            for k in run.samples:
+                run.samples[k] = d["samp_" + k].tolist()
+            for k in run.cyc:
+                run.cyc[k] = d["cyc_" + k].tolist()
+            run._load_extra(d)
+        except (KeyError, TypeError, ValueError) as err:   # ValueError: JSON or engine bytes
             raise ConfigError(path, None, f"not a checkpoint of this version ({err}); "
                               "run again with --restart") from None
-        for k in run.samples:
-            run.samples[k] = d["samp_" + k].tolist()
-        for k in run.cyc:
-            run.cyc[k] = d["cyc_" + k].tolist()
-        run._load_extra(d)
         if run.s.phase == "done" and run.s.cycle < run.cycles:
             run.s.phase = "cyclic"      # more cycles asked for than were run
             run._start_cycle()

@@ -13,14 +13,16 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ..config import ConfigError
 from ..dem import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial
+from ..inputs import open_netcdf
 
 HARD, SOFT = 0, 1
 MATERIAL_NAMES = ("hard", "soft")
 
 
-class LibraryError(ValueError):
-    """A BPM library that cannot be used (message names the file and the variable)."""
+class LibraryError(ConfigError):
+    """A BPM library that cannot be used: `file: variable: what` (one line, exit code 2)."""
 
 
 @dataclass
@@ -52,7 +54,7 @@ class Library:
                 "bond_i", "bond_j")
         for v in need:
             if v not in ds.variables:
-                raise LibraryError(f"{path}: variable {v!r} missing (BPM library format)")
+                raise LibraryError(path, v, "variable missing (BPM library format)")
         self.database = str(ds.attrs.get("database", "unknown"))
         self.thickness = float(ds.attrs.get("thickness_m", 1.0))
         nb = np.asarray(ds["ball_count"].values, np.int64)
@@ -60,7 +62,7 @@ class Library:
         self._b0 = np.r_[0, np.cumsum(nb)]
         self._f0 = np.r_[0, np.cumsum(nf)]
         if self._b0[-1] != ds.sizes.get("ball", 0) or self._f0[-1] != ds.sizes.get("bond", 0):
-            raise LibraryError(f"{path}: ball_count/bond_count do not add up to the ball/bond dims")
+            raise LibraryError(path, "ball_count", "ball_count/bond_count do not add up to the ball/bond dims")
         self.material = np.asarray(ds["material"].values, np.int64)
         self.bx = np.asarray(ds["ball_x"].values, float)
         self.by = np.asarray(ds["ball_y"].values, float)
@@ -93,7 +95,7 @@ def parse_materials(text, path="BPM.nc"):
     try:
         raw = json.loads(text) if text else {}
     except json.JSONDecodeError as err:
-        raise LibraryError(f"{path}: attribute materials_json is not JSON: {err}") from None
+        raise LibraryError(path, "materials_json", f"attribute is not JSON: {err}") from None
     out = {}
     for mid, name in enumerate(MATERIAL_NAMES):
         d = raw.get(name, {}) or {}
@@ -111,15 +113,8 @@ def parse_materials(text, path="BPM.nc"):
 
 
 def load_library(path):
-    """Load ``BPM.nc`` (the bpm package's ``load_library`` when it exists, same format)."""
-    try:
-        with xr.open_dataset(path) as ds:
-            ds = ds.load()
-    except FileNotFoundError:
-        raise LibraryError(f"{path}: file not found") from None
-    except (OSError, ValueError) as err:
-        raise LibraryError(f"{path}: not a readable netCDF file ({err})") from None
-    return Library(ds, path)
+    """Load ``BPM.nc`` (the bpm package's format); ConfigError (one line) if it is not one."""
+    return Library(open_netcdf(path, "bpm"), path)
 
 
 # --------------------------------------------------------------------- synthetic stand-in

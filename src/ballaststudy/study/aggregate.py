@@ -19,6 +19,7 @@ import xarray as xr
 from ..atomic import atomic_path
 from ..config import ConfigError
 from ..forms.validate import validation_row
+from ..inputs import open_netcdf
 from ..metrics.output import VARIABLES
 from ..provenance import Recorder
 from ..standards import GRADING_SIEVES_MM
@@ -53,17 +54,6 @@ def database_group(name, forms_ds=None):
         return str(forms_ds.attrs["group"])
     m = _NAME.match(str(name))
     return m[1] if m else str(name)
-
-
-def _open(path):
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(path, None, "file not found")
-    try:
-        with xr.open_dataset(path) as ds:
-            return ds.load()
-    except (OSError, ValueError) as err:
-        raise ConfigError(path, None, f"not a readable netCDF file ({err})") from None
 
 
 def _factor(path, name, units):
@@ -199,9 +189,9 @@ def aggregate(metrics_paths, forms_paths, out, groups=None):
     global attribute `provenance` and beside the file as `<out>.prov.json`."""
     metrics_paths = {k: Path(p) for k, p in metrics_paths.items()}
     forms_paths = {k: Path(p) for k, p in forms_paths.items()}
-    metrics = {k: (p, _open(p)) for k, p in metrics_paths.items()}
+    metrics = {k: (p, open_netcdf(p, "metrics")) for k, p in metrics_paths.items()}
     used = {db for db, _ in metrics_paths}
-    forms = {db: (p, _open(p)) for db, p in forms_paths.items() if db in used}
+    forms = {db: (p, open_netcdf(p, "forms")) for db, p in forms_paths.items() if db in used}
     inputs = sorted(map(str, metrics_paths.values())) + sorted(str(p) for p, _ in forms.values())
     recorder = Recorder("study aggregate", inputs=inputs,
                         params={"metrics": {f"{db}/{c}": str(p) for (db, c), p in sorted(
@@ -222,7 +212,7 @@ def identify_metrics(path):
     """(database, case) of a metrics.nc: its global attributes `database` and `case` if
     present, else the path .../<database>/<case>/metrics.nc (case 'case_03' or '3' -> 3)."""
     path = Path(path)
-    ds = _open(path)
+    ds = open_netcdf(path, "metrics")
     db = ds.attrs.get("database", path.parent.parent.name if path.parent.parent.name else None)
     case = ds.attrs.get("case", path.parent.name)
     if not db or case in (None, ""):

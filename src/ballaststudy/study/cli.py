@@ -6,11 +6,12 @@ from pathlib import Path
 
 from ..config import ConfigError
 from ..provenance import Recorder
-from .aggregate import BEHAVIOURS, _open, aggregate, identify_metrics
+from ..inputs import open_netcdf, writable_dir, writable_file
+from .aggregate import BEHAVIOURS, aggregate, identify_metrics
 
 
 def _forms_name(path):
-    ds = _open(path)
+    ds = open_netcdf(path, "forms")
     return str(ds.attrs.get("database", Path(path).name.removesuffix(".nc")))
 
 
@@ -25,6 +26,7 @@ def _groups(items):
 
 
 def _study_aggregate(args):
+    writable_file(args.out)
     metrics = {}
     for p in args.metrics:
         key = identify_metrics(p)
@@ -41,14 +43,7 @@ def _study_aggregate(args):
 
 
 def _load_study(path):
-    ds = _open(path)
-    for name in BEHAVIOURS:
-        if name not in ds.data_vars:
-            raise ConfigError(path, name, "variable missing; not a study.nc from `ballaststudy study aggregate`")
-    for dim in ("database", "case", "cycle"):
-        if dim not in ds.dims:
-            raise ConfigError(path, dim, "dimension missing; expected (database, case, cycle)")
-    return ds
+    return open_netcdf(path, "study", require=tuple(BEHAVIOURS))
 
 
 def _check_boot(args):
@@ -70,6 +65,7 @@ def _write_with_provenance(step, args, params, write):
 
 def _study_iri(args):
     _check_boot(args)
+    writable_dir(args.out)
     study = _load_study(args.study)
     from .iri import write_iri
     _write_with_provenance("study iri", args, {"resamples": args.resamples, "min_rho": args.min_rho},
@@ -78,6 +74,7 @@ def _study_iri(args):
 
 def _study_optimise(args):
     _check_boot(args)
+    writable_dir(args.out)
     study = _load_study(args.study)
     from .report import write_report
     _write_with_provenance("study optimise", args, {"resamples": args.resamples},
