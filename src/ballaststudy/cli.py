@@ -19,6 +19,7 @@ from .bpm.cli import register as register_bpm
 from .measured.cli import register as register_measured
 from .rig.cli import register as register_case
 from .study.cli import register as register_study
+from .argtypes import SEED, integer
 
 
 def _forms_generate(args):
@@ -110,8 +111,15 @@ def _config_check(args):
     print(f"{args.config}: ok ({len(names)} databases: {', '.join(names)}; {len(tests)} measured tests)")
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with a usage error in one line like every other bad input (exit 2)."""
+
+    def error(self, message):
+        self.exit(2, f"ballaststudy: error: {self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def build_parser():
-    p = argparse.ArgumentParser(prog="ballaststudy", description=__doc__)
+    p = OneLineParser(prog="ballaststudy", description=__doc__)
     sub = p.add_subparsers(dest="stage", required=True)
 
     forms = sub.add_parser("forms", help="ballast random form generator (thesis ch. 3)")
@@ -141,8 +149,8 @@ def build_parser():
     r = fs.add_parser("report", help="figures like thesis Figs. 3-9 ... 3-16")
     r.add_argument("files", nargs="+", metavar="FILE.nc")
     r.add_argument("--out", required=True, type=Path)
-    r.add_argument("--stones", type=int, default=9, help="random stones per database (Fig. 3-9)")
-    r.add_argument("--seed", type=int, default=0, help="which random stones are shown")
+    r.add_argument("--stones", type=integer(1, 25), default=9, help="random stones per database (Fig. 3-9)")
+    r.add_argument("--seed", type=SEED, default=0, help="which random stones are shown")
     r.set_defaults(func=_forms_report)
 
     pv = sub.add_parser("provenance", help="what made an output, and is it still current")

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 import xarray as xr
 import yaml
 
@@ -37,6 +38,8 @@ ROWS = {
     "study optimise": "study optimise {study:nc} --out {out:dir_out} --resamples 100",
     "measured import": "measured import {conditions:yaml} --out {out:file_out} --data-dir {data:dir}",
     "measured compare": "measured compare {measured:nc} {metrics:nc} --out {out:file_out}",
+    "config check": "config check --config {config:yaml}",
+    "forms evaluate": "forms evaluate {stl:stl} --density 2650",
 }
 # the checkpoint `case run` resumes from: not an argument, it sits beside --out
 CHECKPOINT_OF = {"case run": lambda paths: paths["out"].with_name(paths["out"].stem + ".checkpoint.npz")}
@@ -112,6 +115,7 @@ VARIANTS = {
     "npz": {"directory": _folder, "empty": _write(b""), "garbage bytes": _write(GARBAGE),
             "netCDF": _copy_of(lambda name: "forms"), "wrong kind": _copy_of(lambda name: "other_npz"),
             "truncated": _truncated, "unusable contents": _copy_of(lambda name: "checkpoint")},
+    "stl": {**_IN, "netCDF": _copy_of(lambda name: "forms"), "PNG": _write(PNG), "truncated": _truncated},
     "any": {"missing": _missing, "directory": _folder},
     "dir": {"missing": _missing, "a file": _write(GARBAGE)},
     "results": {"missing": _missing, "a file": _write(GARBAGE), "damaged record": _record(GARBAGE),
@@ -170,6 +174,8 @@ def valid(tmp_path_factory):
     files["conditions"].write_text(yaml.safe_dump(dict(
         source="planted", rig="triaxial", confining_pressure_kPa=30, deviator_max_kPa=230,
         curves=[dict(file="ax.dat", quantity="axial_strain", units="1", sign="compression_positive")])))
+    files["stl"] = d / "stone.stl"
+    trimesh.creation.box((60.0, 40.0, 30.0)).export(files["stl"])
     for folder in ("results", "data"):
         files[folder] = d / folder
         files[folder].mkdir()
@@ -206,9 +212,57 @@ def test_bad_file_is_one_line_exit_2(command, slot, kind, variant, valid, tmp_pa
     assert _tree(case) == before and _tree(valid["results"].parent) == before_valid   # nothing written
 
 
-def test_the_table_covers_every_command_and_variant():
+def test_the_table_covers_every_command_and_variant(fuzz_report):
     pairs = {(c, v) for c, _, _, v in CASES}
-    print(f"\n{len(CASES)} cases: {len(pairs)} (subcommand, variant) pairs over {len(ROWS)} subcommands"
-          f"{'' if AS_ROOT else ' (with read-only folders)'}")
+    fuzz_report.append(f"corrupt files: {len(CASES)} cases, {len(pairs)} (subcommand, variant) pairs over "
+                       f"{len(ROWS)} subcommands{'' if AS_ROOT else ' (with read-only folders)'}: "
+                       + "; ".join(f"{c}: {', '.join(sorted(v for c2, v in pairs if c2 == c))}" for c in ROWS))
     assert {c for c, _ in pairs} == set(ROWS)
     assert {v for _, v in pairs} == {v for k in VARIANTS.values() for v in k}
+
+
+# ------------------------------------------------------------------ command-line numbers
+
+
+def _typed_options():
+    """(command, option, type) of every option of every subcommand that takes a number."""
+    import argparse
+
+    from ballaststudy.cli import build_parser
+
+    def walk(parser, prefix):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    yield from walk(sub, f"{prefix} {name}")
+            elif action.type is not None and action.option_strings:
+                yield prefix.strip(), action.option_strings[-1], action.type
+    return list(walk(build_parser(), ""))
+
+
+def test_every_numeric_option_has_a_range():
+    """No bare int/float option: each goes through argtypes, which states the allowed range."""
+    options = _typed_options()
+    assert len(options) >= 12
+    bare = [(c, o) for c, o, t in options if t in (int, float)]
+    assert not bare, bare
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf", "1e400", str(10**30), "ten", ""])
+def test_numeric_options_refuse_non_finite_huge_and_text(value):
+    import argparse
+    for command, option, parse in _typed_options():
+        if parse.__qualname__.split(".")[0] not in ("integer", "number"):
+            continue
+        with pytest.raises(argparse.ArgumentTypeError, match="allowed: an? (integer|number) >= "):
+            parse(value)
+
+
+def test_a_bad_option_is_one_line(capsys):
+    from ballaststudy.cli import main
+    with pytest.raises(SystemExit) as stop:
+        main(["case", "run", "x.nc", "--cycles", "0", "--out", "m.nc"])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.count("\n") == 1, err
+    assert err.startswith("ballaststudy: error: ballaststudy case run: argument --cycles: '0' is not allowed; "
+                          "allowed: an integer >= 1")

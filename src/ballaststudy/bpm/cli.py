@@ -7,6 +7,7 @@ from tqdm import tqdm
 
 from ..config import ConfigError, job_seed, load_config
 from ..inputs import writable_file
+from ..argtypes import SEED, integer
 
 
 def bpm_seed(study_seed, database):
@@ -51,9 +52,9 @@ def register(subparsers):
     b.add_argument("forms", type=Path, metavar="FORMS.nc")
     b.add_argument("--out", required=True, type=Path, metavar="BPM.nc")
     b.add_argument("--config", default="config/config.yaml", type=Path)
-    b.add_argument("--max-stones", type=int, metavar="N",
+    b.add_argument("--max-stones", type=integer(1, 10_000_000), metavar="N",
                    help="override bpm.max_stones (0 = every stone)")
-    b.add_argument("--seed", type=int, help="override the seed derived from the study seed")
+    b.add_argument("--seed", type=SEED, help="override the seed derived from the study seed")
     b.add_argument("--quiet", action="store_true")
     b.set_defaults(func=_bpm_build)
     return bpm

@@ -16,6 +16,7 @@ from ..config import ConfigError, load_config
 from ..inputs import open_netcdf, writable_dir, writable_file
 from ..provenance import Recorder
 from .params import RigParams, case_seed
+from ..argtypes import SEED, integer
 
 
 def _kind(args, cfg):
@@ -158,9 +159,9 @@ def register(subparsers):
 
     a = cs.add_parser("assemble", help="drop, tamp and relax stones from a BPM library")
     a.add_argument("library", metavar="BPM.nc", type=Path)
-    a.add_argument("--case", type=int, required=True, help="case number (selects the seed)")
+    a.add_argument("--case", type=integer(0, 1_000_000), required=True, help="case number (selects the seed)")
     a.add_argument("--out", required=True, type=Path, help="assembled state (.nc)")
-    a.add_argument("--seed", type=int, help="override the seed derived from (study seed, database, case)")
+    a.add_argument("--seed", type=SEED, help="override the seed derived from (study seed, database, case)")
     a.add_argument("--rig", choices=("box", "biaxial"), help="override the config's rig.kind")
     a.add_argument("--config", default="config/config.yaml", type=Path)
     a.add_argument("--quiet", action="store_true")
@@ -168,11 +169,11 @@ def register(subparsers):
 
     r = cs.add_parser("run", help="static pre-loading, cyclic loading, metrics.nc")
     r.add_argument("assembled", metavar="ASSEMBLED.nc", type=Path)
-    r.add_argument("--cycles", type=int, required=True, help="loading cycles (thesis 1000)")
+    r.add_argument("--cycles", type=integer(1, 10_000_000), required=True, help="loading cycles (thesis 1000)")
     r.add_argument("--out", required=True, type=Path, help="metrics file (.nc)")
-    r.add_argument("--checkpoint-every", type=int, help="cycles between checkpoints (config default)")
+    r.add_argument("--checkpoint-every", type=integer(1, 10_000_000), help="cycles between checkpoints (config default)")
     r.add_argument("--restart", action="store_true", help="ignore an existing checkpoint")
-    r.add_argument("--stop-after", type=int, help=argparse_suppress())
+    r.add_argument("--stop-after", type=integer(1, 10_000_000), help=argparse_suppress())
     r.add_argument("--no-vtk", action="store_true", help="write no VTK snapshots")
     r.add_argument("--no-figures", action="store_true", help="write no PNG figures")
     r.add_argument("--conditions", type=Path, help="biaxial: run under this measured test's "

@@ -8,6 +8,7 @@ from ..config import ConfigError
 from ..provenance import Recorder
 from ..inputs import open_netcdf, writable_dir, writable_file
 from .aggregate import BEHAVIOURS, aggregate, identify_metrics
+from ..argtypes import SEED, integer, number
 
 
 def _forms_name(path):
@@ -46,13 +47,6 @@ def _load_study(path):
     return open_netcdf(path, "study", require=tuple(BEHAVIOURS))
 
 
-def _check_boot(args):
-    if args.resamples < 100:
-        raise ConfigError("command line", "--resamples", f"{args.resamples} is out of range; allowed: >= 100")
-    if getattr(args, "min_rho", 0.3) is not None and not 0 <= getattr(args, "min_rho", 0.3) <= 1:
-        raise ConfigError("command line", "--min-rho", f"{args.min_rho} is out of range; allowed: 0-1")
-
-
 def _write_with_provenance(step, args, params, write):
     recorder = Recorder(step, inputs=[args.study], params=params, seed=args.seed)
     paths = write()
@@ -64,7 +58,6 @@ def _write_with_provenance(step, args, params, write):
 
 
 def _study_iri(args):
-    _check_boot(args)
     writable_dir(args.out)
     study = _load_study(args.study)
     from .iri import write_iri
@@ -73,7 +66,6 @@ def _study_iri(args):
 
 
 def _study_optimise(args):
-    _check_boot(args)
     writable_dir(args.out)
     study = _load_study(args.study)
     from .report import write_report
@@ -86,8 +78,8 @@ def _analysis_parser(actions, name, help_text):
     p = actions.add_parser(name, help=help_text)
     p.add_argument("study", type=Path, metavar="STUDY.nc")
     p.add_argument("--out", required=True, type=Path, help="output folder")
-    p.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (>= 100)")
-    p.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    p.add_argument("--resamples", type=integer(100, 100_000), default=2000, help="bootstrap resamples (>= 100)")
+    p.add_argument("--seed", type=SEED, default=0, help="bootstrap seed")
     return p
 
 
@@ -107,7 +99,7 @@ def register(subparsers):
     a.set_defaults(func=_study_aggregate)
 
     i = _analysis_parser(ss, "iri", "IRI tables like thesis Table 5-2: CSV, Markdown, heatmap")
-    i.add_argument("--min-rho", type=float, default=0.3, help="smallest |Spearman rho| for a verdict other than none")
+    i.add_argument("--min-rho", type=number(0.0, 1.0), default=0.3, help="smallest |Spearman rho| for a verdict other than none")
     i.set_defaults(func=_study_iri)
 
     o = _analysis_parser(ss, "optimise", "ranking, Pareto set, recommendation, thesis findings, Figs. 5-1 ... 5-6")
