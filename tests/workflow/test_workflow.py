@@ -135,6 +135,25 @@ def test_unreadable_config_file_is_one_line(study, content):
     assert out.stderr.startswith("ballaststudy: error: config/config.yaml: not ")
 
 
+def test_a_failing_job_shows_our_line(study):
+    """Bad input met inside a job (a damaged forms file): Snakemake prints the job's log
+    (profiles/default), so the one line reaches the terminal, with no traceback."""
+    forms = study / "results" / "forms" / "G_1-5.nc"
+    saved = study / "saved.nc"
+    shutil.copy2(forms, saved)
+    try:
+        forms.write_bytes(b"not a netCDF file at all")
+        shutil.copystat(saved, forms)       # same mtime: Snakemake does not remake it
+        out = subprocess.run(["snakemake", "--cores", "1", "results/bpm/G_1-5.nc"], cwd=study,
+                             capture_output=True, text=True)
+    finally:
+        shutil.copy2(saved, forms)
+    log = out.stdout + out.stderr
+    assert out.returncode != 0
+    assert "ballaststudy: error: results/forms/G_1-5.nc: not a netCDF file" in log, log
+    assert "Traceback" not in log, log
+
+
 def test_slurm_profile_dry_run(study):
     log = _snakemake(study, "-n", "--profile", "profiles/slurm", "--forceall")
     assert _jobs(log).get("forms_generate") == 2, log
