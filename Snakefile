@@ -2,6 +2,7 @@
 # Thin rules: every rule calls one `ballaststudy` subcommand; the logic is in the package.
 # Config: config/config.yaml (or --configfile), validated by workflow/schemas/ at start.
 import sys
+import time
 
 from snakemake.utils import min_version, validate
 
@@ -34,6 +35,14 @@ try:
 except ConfigError as err:
     stop(err)
 validate(config, "workflow/schemas/config.schema.yaml")
+STARTED = time.time()
+
+
+onerror:
+    # a job's one-line reason, from its log, on the terminal as from the command line
+    from ballaststudy.joblogs import error_lines
+    for line in error_lines(f"{RESULTS}/logs", STARTED - 1):
+        print(line, file=sys.stderr)
 RESULTS = config["results_dir"]
 
 

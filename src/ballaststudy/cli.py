@@ -72,9 +72,10 @@ def _forms_report(args):
     recorder = Recorder("forms report", inputs=args.files, params={"stones": args.stones, "seed": args.seed})
     paths = write_report(databases, args.out, args.stones, args.seed)
     recorder.finish()
+    tables = [p for p in paths if str(p).endswith(".csv")]
+    for k, path in enumerate(tables):   # the figures go in the first table's record
+        recorder.write_beside(path, also=[] if k else [p for p in paths if p not in tables])
     for path in paths:
-        if str(path).endswith(".csv"):
-            recorder.write_beside(path)
         print(f"wrote {path}")
 
 

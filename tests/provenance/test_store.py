@@ -86,3 +86,17 @@ def test_verify_covers_the_stl_archive_of_forms_generate(tmp_path, capsys):
     rc, out = _verify(results, capsys)
     assert rc == 1 and f"{archive}: output missing" in out, out
     assert "tiny.nc:" not in out, f"only the archive is at fault: {out}"
+
+
+def test_figures_written_by_a_step_are_in_its_record(tmp_path):
+    """write_beside(..., also=figures): `show` finds the figure's step, `verify` misses it when deleted."""
+    main, fig = tmp_path / "metrics.nc", tmp_path / "case.png"
+    main.write_bytes(b"data")
+    fig.write_bytes(b"png")
+    rec = Recorder("case run")
+    rec.finish()
+    rec.write_beside(main, also=[fig])
+    records = load_records(tmp_path)
+    assert records[str(fig)]["step"] == "case run" and not verify(records)
+    fig.unlink()
+    assert verify(load_records(tmp_path)) == [(str(fig), "output missing (recorded by 'case run')")]

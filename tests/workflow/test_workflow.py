@@ -45,11 +45,20 @@ def study(tmp_path_factory):
     return d
 
 
+def _unrecorded(results):
+    """Files under `results` that no provenance record lists as an output (logs excepted)."""
+    from ballaststudy.provenance.store import load_records
+    recorded = {str((results.parent / p).resolve()) for p in load_records(results)}   # paths relative to the run folder
+    return [p for p in results.rglob("*") if p.is_file() and not p.name.endswith(".prov.json")
+            and "logs" not in p.relative_to(results).parts and str(p.resolve()) not in recorded]
+
+
 def test_first_run_makes_every_output(study):
     for name in ("G_1-5", "box_test"):
         assert (study / "results" / "forms" / f"{name}.nc").is_file()
         assert (study / "results" / "forms" / f"{name}.stl.zip").is_file()
     assert (study / "results" / "forms" / "report" / "validation.csv").is_file()
+    assert not _unrecorded(study / "results")     # STL archives and report figures too
 
 
 def test_rerun_with_nothing_changed_does_nothing(study):
@@ -137,7 +146,7 @@ def test_unreadable_config_file_is_one_line(study, content):
 
 def test_a_failing_job_shows_our_line(study):
     """Bad input met inside a job (a damaged forms file): Snakemake prints the job's log
-    (profiles/default), so the one line reaches the terminal, with no traceback."""
+    (the Snakefile's onerror), so the one line reaches the terminal, with no traceback."""
     forms = study / "results" / "forms" / "G_1-5.nc"
     saved = study / "saved.nc"
     shutil.copy2(forms, saved)
@@ -175,6 +184,7 @@ def test_whole_chain_runs_and_reruns_only_what_changed(tmp_path):
     _snakemake(d)
     for out in ("results/study.nc", "results/study/iri/iri.csv", "results/study/report/report.md"):
         assert (d / out).is_file(), out
+    assert not _unrecorded(d / "results")
     assert "Nothing to be done" in _snakemake(d, "-n")
     with _edited(d / "config" / "config.yaml", lambda c: _loading(c).update(cyclic_max_kN=40.0)):
         jobs = _jobs(_snakemake(d, "-n"))

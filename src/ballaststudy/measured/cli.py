@@ -3,7 +3,7 @@ to one netCDF. Bad input raises ConfigError (file[:line], key, what is allowed),
 one line with exit code 2; nothing is written then."""
 from pathlib import Path
 
-from ..inputs import input_dir, writable_file
+from ..inputs import input_dir, input_file, writable_file
 from ..provenance import Recorder
 from .importer import curve_files, measured_dataset, write_test
 
@@ -27,7 +27,11 @@ def _compare(args):
     from .compare import write_comparison
     out = writable_file(args.out)
     figure = None if args.no_figure else writable_file(out.with_suffix(".png"))
+    inputs = [input_file(p, "expected a netCDF file") for p in (args.measured, *args.cases)]
+    recorder = Recorder("measured compare", inputs=inputs)    # hashes them: they must exist
     ds = write_comparison(args.measured, args.cases, out, figure=figure)
+    recorder.finish()
+    recorder.write_beside(out, also=[figure] if figure else [])
     if not args.quiet:
         print(f"wrote {args.out}: {ds.sizes['case']} simulated cases on {ds.sizes['cycle']} cycles")
 

@@ -75,10 +75,11 @@ class Recorder:
         self.record["finished"] = _now()
         return self.record
 
-    def write_beside(self, output):
-        """Write `<output>.prov.json` with the output's own sha256 (atomic)."""
+    def write_beside(self, output, also=()):
+        """Write `<output>.prov.json` with the sha256 of the output and of the files `also`
+        made by the same step (figures, VTK), so every file the step wrote has a record (atomic)."""
         output = Path(output)
-        rec = dict(self.record, output={str(output): sha256_file(output)})
+        rec = dict(self.record, output={str(p): sha256_file(p) for p in (output, *map(Path, also))})
         side = output.with_name(output.name + ".prov.json")
         tmp = side.with_name(side.name + ".tmp")
         tmp.write_text(json.dumps(rec, indent=1, sort_keys=True, default=str))

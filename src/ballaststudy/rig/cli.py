@@ -147,7 +147,9 @@ def _case_run(args):
         attrs["measured_conditions_file"] = str(args.conditions)
     write_outputs(run, out, figures=not args.no_figures, attrs=attrs)
     recorder.finish()
-    recorder.write_beside(out)
+    figures = [] if args.no_figures else [out.with_name("case.png"), out.with_name("behaviours.png")]
+    vtk = sorted(p for p in vtk_dir.rglob("*") if p.is_file()) if vtk_dir is not None else []
+    recorder.write_beside(out, also=[p for p in figures if p.is_file()] + vtk)
     if not args.quiet:
         print(f"wrote {out}")
 

@@ -51,9 +51,10 @@ def _write_with_provenance(step, args, params, write):
     recorder = Recorder(step, inputs=[args.study], params=params, seed=args.seed)
     paths = write()
     recorder.finish()
+    texts = [p for p in paths if p.suffix in (".csv", ".md")]
+    for k, path in enumerate(texts):    # the figures go in the first text's record
+        recorder.write_beside(path, also=[] if k else [p for p in paths if p not in texts])
     for path in paths:
-        if path.suffix in (".csv", ".md"):
-            recorder.write_beside(path)
         print(f"wrote {path}")
 
 
