@@ -52,3 +52,22 @@ def test_a_box_metrics_file_is_refused(tmp_path, capsys):
                  str(tmp_path / "o.nc")]) == 2
     assert "box.nc: axial_strain: not a biaxial case" in capsys.readouterr().err
     assert not (tmp_path / "o.nc").exists()
+
+
+def test_a_failed_case_is_kept_with_its_reason(tmp_path):
+    """A specimen that failed in the first loading (no cycle rows) is a result: its curve is
+    empty, its reason is in the comparison's attributes, the others are compared as usual."""
+    d = tmp_path / "m"
+    d.mkdir()
+    measured = tmp_path / "measured.nc"
+    main(["measured", "import", str(write_test(d)), "--out", str(measured), "--quiet"])
+    failed = tmp_path / "failed.nc"
+    xr.Dataset(coords={"cycle": np.arange(0)},
+               attrs={"failed": 1, "failure": "the specimen failed in the first loading: x"}).to_netcdf(failed)
+    ok = fake_case(tmp_path / "ok.nc", [0.001, 0.002])
+    out = tmp_path / "cmp.nc"
+    assert main(["measured", "compare", str(measured), str(failed), str(ok), "--out", str(out), "--quiet"]) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["simulated_failures"] == "case 0: the specimen failed in the first loading: x"
+        assert np.isnan(ds["simulated_axial_strain"].values[0]).all()
+        np.testing.assert_array_equal(ds["simulated_axial_strain"].values[1, :2], [0.001, 0.002])

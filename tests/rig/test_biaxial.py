@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ballaststudy.rig.biaxial import (KPA, BiaxialParams, BiaxialRig, BiaxialRun,
+from ballaststudy.rig.biaxial import (AXIAL, KPA, BiaxialParams, BiaxialRig, BiaxialRun,
                                       assemble_biaxial, write_biaxial_outputs)
 from ballaststudy.rig.library import load_library
 
@@ -205,11 +205,25 @@ def test_real_time_mode_follows_the_frequency(specimen):
     assert np.all(np.array(run.cyc["axial_stress_min"]) < lo + 0.2 * (hi - lo))
 
 
-def test_a_deviator_beyond_the_strength_is_reported(specimen):
-    """q_max far above what the specimen can carry: the first loading stops with one
-    clear error after max_cycle_steps instead of pressing on for ever."""
+@pytest.mark.parametrize("strain, soft, steps, why", [
+    (0.01, 1.0, 10**7, "axial strain 0.0"), (1.0, 0.005, 10**7, "and fell below it over a further"),
+    (1.0, 1.0, 20000, "did not reach p + q_max = 5030 kPa")])
+def test_a_deviator_beyond_the_strength_fails_the_specimen(specimen, tmp_path, strain, soft, steps, why):
+    """q_max far above what the specimen can carry: as in a stress-controlled test it fails
+    (axial strain at the failure strain, or the bound not reached within max_cycle_steps);
+    the run ends as a result with the reason, and metrics.nc records it."""
     rig = BiaxialRig.load(specimen)
-    rig.params.deviator_max_kPa, rig.params.max_cycle_steps = 5000.0, 20000
-    run = BiaxialRun(rig, cycles=1)
-    with pytest.raises(RuntimeError, match="yields below it"):
-        run.run()
+    p = rig.params
+    p.deviator_max_kPa, p.failure_axial_strain, p.softening_strain, p.max_cycle_steps = 5000.0, strain, soft, steps
+    run = BiaxialRun(rig, cycles=1).run()
+    assert run.s.phase == "done" and run.s.cycle == 0
+    assert run.s.failure.startswith("the specimen failed in the first loading: ") and why in run.s.failure
+    if strain < 1:
+        assert strain <= run.strains()[0] < 2 * strain
+    if soft < 1:       # the strain after the peak, and sigma_1 below its peak
+        assert soft <= run.strains()[0] - run.s.peak_strain < 2 * soft
+        assert np.mean(run.samples["axial_stress"][-50:]) < run.s.peak_stress
+    assert run.control.reading(AXIAL) < 0.5 * 5030.0 * KPA     # far below the bound it could not reach
+    write_biaxial_outputs(run, tmp_path / "metrics.nc", figures=False)
+    with xr.open_dataset(tmp_path / "metrics.nc") as ds:
+        assert ds.attrs["failed"] == 1 and ds.attrs["failure"] == run.s.failure and ds.sizes["cycle"] == 0

@@ -21,7 +21,7 @@ def compare_dataset(measured_path, case_paths):
     measured = open_netcdf(measured_path, "measured")
     cases = [open_netcdf(p, "metrics") for p in case_paths]
     for p, ds in zip(case_paths, cases):
-        if "axial_strain" not in ds:
+        if "axial_strain" not in ds and not ds.attrs.get("failed"):   # failed before cycle 1: no rows
             raise ConfigError(p, "axial_strain", "not a biaxial case's metrics.nc")
     n_sim = [np.arange(1, ds.sizes["cycle"] + 1, dtype=float) for ds in cases]
     cycle = np.unique(np.concatenate([measured["cycle"].values, *n_sim]))
@@ -46,6 +46,8 @@ def compare_dataset(measured_path, case_paths):
         "title": "measured cyclic test and its simulated biaxial cases",
         "simulated_cases": ", ".join(str(p) for p in case_paths),
         "simulated_seeds": ", ".join(str(ds.attrs.get("seed", "")) for ds in cases),
+        "simulated_failures": "; ".join(f"case {k}: {ds.attrs['failure']}" for k, ds in enumerate(cases)
+                                        if ds.attrs.get("failed")) or "none",
         "comparison_note": "simulated cycle k (0-based) is plotted at N = k + 1; simulated "
                            "strains are 2D (volumetric = area strain) from the end of "
                            "consolidation; measured from the start of the test"})
@@ -91,5 +93,7 @@ def write_comparison(measured_path, case_paths, out, figure=None):
     if figure:
         cond = ", ".join(f"{k} {ds.attrs[k]:g}" for k in ("confining_pressure_kPa",
                          "deviator_max_kPa", "frequency_Hz") if k in ds.attrs)
-        plot_comparison(ds, figure, f"{ds.attrs.get('source', '')[:90]}\n{cond}")
+        failed = ds.attrs["simulated_failures"].count("case ")
+        note = f"; {failed} of {ds.sizes['case']} cases failed (attribute simulated_failures)" if failed else ""
+        plot_comparison(ds, figure, f"{ds.attrs.get('source', '')[:90]}\n{cond}{note}")
     return ds

@@ -58,6 +58,8 @@ class BiaxialParams(DepositionParams):
     platen_v_max_m_s: float = 0.005
     platen_v_min_m_s: float = 0.0005
     braking_fraction: float = 0.25
+    failure_axial_strain: float = 0.15   # a stress-controlled specimen beyond this has failed
+    softening_strain: float = 0.02       # ... or once sigma_1 fell past its peak over this strain
     cycles: int = 100
     control_every: int = 10
     loading_dt_factor: float = 2.0
@@ -236,6 +238,9 @@ class BiaxialState(CycleState):
     height0: float = float("nan")     # H0, W0: at the end of consolidation
     width0: float = float("nan")
     window_means: list = field(default_factory=list)    # stress window means (axial, left, right)
+    failure: str = ""                 # why the specimen failed ("" = it did not)
+    peak_stress: float = 0.0          # sigma_1's largest recent mean in this loading, its strain
+    peak_strain: float = 0.0
 
 
 class BiaxialRun(CyclicRun):
@@ -319,22 +324,40 @@ class BiaxialRun(CyclicRun):
         self._rescale()
 
     def check_stalled(self):
-        """The first loading to p + q_max must end within max_cycle_steps too: a specimen
-        weaker than sigma_1 = p + q_max yields without end instead."""
+        """A stress-controlled specimen that cannot carry sigma_1 = p + q_max fails, as in the
+        laboratory: its axial strain runs away. The run ends as a result, not an error, when
+        the axial strain reaches failure_axial_strain, or sigma_1 (mean of the last 50
+        samples) passed a peak below the bound and the specimen went on straining by
+        softening_strain (the peak strength of a strain-controlled test), or a loading to
+        p + q_max does not end within max_cycle_steps; ``failure`` says which, where and at
+        what stress."""
         s, p = self.s, self.rig.params
-        steps = self.rig.sim.step - s.loading_start_step
-        if s.phase == "loading" and steps > p.max_cycle_steps:
-            raise RuntimeError(
-                f"the first loading did not reach p + q_max = "
-                f"{p.confining_pressure_kPa + p.deviator_max_kPa:g} kPa within {steps} steps "
-                f"(axial stress {self.control.reading(AXIAL) / KPA:.1f} kPa, axial strain "
-                f"{self.strains()[0]:.4f}): the specimen yields below it")
-        super().check_stalled()
+        if s.phase not in ("loading", "cyclic"):
+            return super().check_stalled()
+        ea, sig1 = self.strains()[0], float(np.mean(self.samples["axial_stress"][-50:]))
+        if sig1 > s.peak_stress:
+            s.peak_stress, s.peak_strain = sig1, ea
+        steps = self.rig.sim.step - (s.loading_start_step if s.phase == "loading" else s.cycle_start_step)
+        if ea >= p.failure_axial_strain:
+            why = f"axial strain {ea:.3f} reached failure_axial_strain {p.failure_axial_strain:g}"
+        elif ea - s.peak_strain >= p.softening_strain and s.peak_sample < 0:
+            why = (f"sigma_1 peaked at {s.peak_stress / KPA:.1f} kPa (axial strain {s.peak_strain:.4f}) "
+                   f"and fell below it over a further softening_strain {p.softening_strain:g}")
+        elif steps > p.max_cycle_steps:
+            why = (f"sigma_1 did not reach p + q_max = {p.confining_pressure_kPa + p.deviator_max_kPa:g} "
+                   f"kPa within max_cycle_steps {p.max_cycle_steps} (axial strain {ea:.4f})")
+        else:
+            return
+        where = "in the first loading" if s.phase == "loading" else f"in cycle {s.cycle}"
+        s.failure = (f"the specimen failed {where}: {why}; sigma_1 "
+                     f"{self.control.reading(AXIAL) / KPA:.1f} kPa at that moment")
+        s.phase = "done"
 
     def _trough(self):
         """The first trough after consolidation starts cycle 0 (the platen has loaded to
         p + q_max and unloaded to p + q_min once: the profile starts at the bound)."""
         self._rescale()
+        self.s.peak_stress = 0.0        # each loading branch is watched for softening anew
         super()._trough()
 
     def strains(self):
@@ -434,6 +457,7 @@ def write_biaxial_outputs(run, out, figures=True, attrs=None):
                                        "width_at_consolidation_m": s.width0,
                                        "stress_convention": "2D stresses: force per boundary "
                                        "length per thickness t; compression positive",
+                                       "failed": int(bool(s.failure)), "failure": s.failure,
                                        **(attrs or {})})
     write_metrics(Path(out), ds)
     if figures:

@@ -146,6 +146,8 @@ def _case_run(args):
     if args.conditions:
         attrs["measured_conditions_file"] = str(args.conditions)
     write_outputs(run, out, figures=not args.no_figures, attrs=attrs)
+    if getattr(run.s, "failure", ""):     # a result (recorded in the file), not an error
+        print(f"ballaststudy: note: {out}: {run.s.failure} (after {run.s.cycle} cycles)", file=sys.stderr)
     recorder.finish()
     figures = [] if args.no_figures else [out.with_name("case.png"), out.with_name("behaviours.png")]
     vtk = sorted(p for p in vtk_dir.rglob("*") if p.is_file()) if vtk_dir is not None else []
