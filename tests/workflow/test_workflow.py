@@ -46,7 +46,8 @@ def study(tmp_path_factory):
 
 
 def _unrecorded(results):
-    """Files under `results` that no provenance record lists as an output (logs excepted)."""
+    """Files under `results` that no provenance record lists as an output (logs excepted;
+    report.html is Snakemake's own)."""
     from ballaststudy.provenance.store import load_records
     recorded = {str((results.parent / p).resolve()) for p in load_records(results)}   # paths relative to the run folder
     return [p for p in results.rglob("*") if p.is_file() and not p.name.endswith(".prov.json")

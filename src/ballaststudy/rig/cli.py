@@ -151,7 +151,8 @@ def _case_run(args):
     recorder.finish()
     figures = [] if args.no_figures else [out.with_name("case.png"), out.with_name("behaviours.png")]
     vtk = sorted(p for p in vtk_dir.rglob("*") if p.is_file()) if vtk_dir is not None else []
-    recorder.write_beside(out, also=[p for p in figures if p.is_file()] + vtk)
+    kept = [p for p in (*figures, ckpt) if p.is_file()]     # the checkpoint: to extend the run later
+    recorder.write_beside(out, also=kept + vtk)
     if not args.quiet:
         print(f"wrote {out}")
 
