@@ -28,6 +28,8 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--modes", nargs="+", default=["quasi_static", "real_time"])
     ap.add_argument("--frequency", type=float, help="f of the real-time mode [Hz] (config's)")
+    ap.add_argument("--deviator-max", type=float, metavar="KPA",
+                    help="q_max (config's); below the specimen's peak strength, else it fails")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from case_benchmark import box_test_library
@@ -50,6 +52,8 @@ def main(argv=None):
         rig.params.mode = mode
         if a.frequency:
             rig.params.frequency_Hz = a.frequency
+        if a.deviator_max:
+            rig.params.deviator_max_kPa = a.deviator_max
         state = f" f={rig.params.frequency_Hz:g} Hz" if mode == "real_time" else ""
         run = BiaxialRun(rig, cycles=a.cycles)
         t1, s1 = time.perf_counter(), rig.sim.step
@@ -60,10 +64,16 @@ def main(argv=None):
         t2, s2 = time.perf_counter(), rig.sim.step
         run.run()
         t = time.perf_counter() - t2
-        steps = rig.sim.step - s2
-        per = t / a.cycles
-        print(f"[{mode}{state}] balls={n_balls} bonds={rig.layout.bonds_installed} "
-              f"cycles={a.cycles} steps_per_cycle={steps / a.cycles:.0f} dt={rig.sim.dt:.3g} s "
+        steps, done = rig.sim.step - s2, len(run.s.rows)
+        if run.s.failure:
+            print(f"[{mode}{state}] q_max {rig.params.deviator_max_kPa:g} kPa: {run.s.failure} "
+                  f"(after {done} cycles; give --deviator-max below the peak)")
+        if not done:
+            print(f"[{mode}{state}] minutes_per_1000_cycles=n/a (no cycle completed)")
+            continue
+        per = t / done
+        print(f"[{mode}{state}] balls={n_balls} bonds={rig.layout.bonds_installed} q_max="
+              f"{rig.params.deviator_max_kPa:g} kPa cycles={done} steps_per_cycle={steps / done:.0f} dt={rig.sim.dt:.3g} s "
               f"time_per_step_us={t / steps * 1e6:.1f} ball_steps_per_s={n_balls * steps / t:.3g}")
         print(f"[{mode}{state}] axial strain after each cycle: "
               f"{[round(r['axial_strain'], 5) for r in run.s.rows]}")
