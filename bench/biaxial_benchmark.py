@@ -2,14 +2,16 @@
 
     NUMBA_NUM_THREADS=1 python bench/biaxial_benchmark.py [--cycles 10]
         [--config config/config.yaml] [--library BPM.nc] [--seed 1]
-        [--modes quasi_static real_time] [--frequency 20]
+        [--modes quasi_static real_time] [--frequency 20] [--deviator-max KPA]
+        [--width 0.3 --height 0.6] [--membrane-segments N]
 
 Uses the BPM library given, else box_test's at the config's resolution (built once and
 cached in results/bench_cache, like bench/case_benchmark.py). Prints assembly and
 consolidation times, then per loading mode (quasi-static; real-time at the frequency f,
 which it states) balls, bonds, steps per cycle, time per step and
 ``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase. Both modes start from
-the same assembled specimen. Never a test."""
+the same assembled specimen; --width/--height/--membrane-segments change the config's
+specimen (e.g. measured_sim's 0.15 x 0.30 m, or a membrane). Never a test."""
 import argparse
 import os
 import sys
@@ -30,6 +32,9 @@ def main(argv=None):
     ap.add_argument("--frequency", type=float, help="f of the real-time mode [Hz] (config's)")
     ap.add_argument("--deviator-max", type=float, metavar="KPA",
                     help="q_max (config's); below the specimen's peak strength, else it fails")
+    ap.add_argument("--width", type=float, help="specimen width [m] (config's)")
+    ap.add_argument("--height", type=float, help="specimen height [m] (config's)")
+    ap.add_argument("--membrane-segments", type=int, help="1 rigid sides, n > 1 a membrane (config's)")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from case_benchmark import box_test_library
@@ -38,12 +43,17 @@ def main(argv=None):
     from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRig, BiaxialRun, assemble_biaxial
     from ballaststudy.rig.library import load_library
     params = BiaxialParams.from_config(load_config(a.config).get("rig", {}))
+    for key, value in (("width_m", a.width), ("height_m", a.height),
+                       ("membrane_segments", a.membrane_segments)):
+        if value is not None:
+            setattr(params, key, value)
     lib = load_library(a.library or box_test_library(a.config))
     t0 = time.perf_counter()
     rig = assemble_biaxial(lib, params, seed=a.seed)
     print(f"assembly: {time.perf_counter() - t0:.1f} s, stages {rig.layout.stage_steps}")
     n_balls = int((rig.sim.balls.alive == 1).sum())
-    print(f"specimen {params.width_m:g} x {params.height_m:g} m: balls={n_balls} "
+    print(f"specimen {params.width_m:g} x {params.height_m:g} m, membrane_segments="
+          f"{params.membrane_segments}: balls={n_balls} "
           f"bonds={rig.layout.bonds_installed} dt={rig.sim.dt:.3g} s")
     assembled = Path(tempfile.mkdtemp()) / "assembled.nc"
     rig.save(assembled)

@@ -227,3 +227,112 @@ def test_a_deviator_beyond_the_strength_fails_the_specimen(specimen, tmp_path, s
     write_biaxial_outputs(run, tmp_path / "metrics.nc", figures=False)
     with xr.open_dataset(tmp_path / "metrics.nc") as ds:
         assert ds.attrs["failed"] == 1 and ds.attrs["failure"] == run.s.failure and ds.sizes["cycle"] == 0
+
+
+# ------------------------------------------------------------------ flexible membrane
+MEMBRANE = 6
+
+
+@pytest.fixture(scope="module")
+def membrane_specimen(small_library, tmp_path_factory):
+    params = BiaxialParams(**SMALL, membrane_segments=MEMBRANE)
+    rig = assemble_biaxial(load_library(small_library), params, seed=7)
+    path = tmp_path_factory.mktemp("membrane") / "assembled.nc"
+    rig.save(path)
+    return path
+
+
+def assert_membrane_spans_the_specimen(rig, atol=1e-12):
+    """n segments a side, each 1/n of the height between the platens, end to end; the
+    extensions reach beyond the platens from the end nodes (to round-off: the engine moves
+    a wall's points about its centre every step; after a run, to what the platen moved in
+    the last engine run: ``atol``)."""
+    seg, lay = rig.sim.walls.seg, rig.layout
+    bottom, top = seg[lay.bottom[0], 1], seg[lay.top[0], 1]
+    nodes = np.linspace(bottom, top, MEMBRANE + 1)
+    for side in ("left", "right"):
+        groups = rig.side_groups(side)
+        assert len(groups) == MEMBRANE
+        for k, g in enumerate(groups):
+            ys = np.sort(seg[g[0], [1, 3]])
+            np.testing.assert_allclose(ys, nodes[k:k + 2], rtol=0, atol=atol)
+            assert seg[g[0], 0] == seg[g[0], 2]          # vertical
+            for ext in g[1:]:
+                assert np.all(seg[ext, [0, 2]] == seg[g[0], 0])
+                ye = np.sort(seg[ext, [1, 3]])
+                assert (ye[1] - bottom if k == 0 else ye[0] - top) == pytest.approx(0, abs=atol)
+
+
+def test_membrane_assembled(membrane_specimen):
+    rig = BiaxialRig.load(membrane_specimen)
+    assert rig.params.membrane_segments == MEMBRANE
+    assert_membrane_spans_the_specimen(rig)
+    assert rig.width() == pytest.approx(0.15)
+
+
+def test_membrane_hold_balances_each_segment(membrane_specimen):
+    """Static deviator hold with the membrane: each side p H t and the top (p + q) W t
+    (W the mean width, area / H) within 2 %, as for rigid walls; and each segment, under its
+    own servo, carries p L t (L = H / n) within 10 % (a segment meets few stones)."""
+    rig = BiaxialRig.load(membrane_specimen)
+    run = BiaxialRun(rig, cycles=1)
+    q = 40.0
+    run.hold(q)
+    sim, lay, t = rig.sim, rig.layout, rig.sim.thickness
+    groups = rig.side_groups("left") + rig.side_groups("right")
+    top, sides, segs = [], [], []
+    for _ in range(100):
+        sim.run(10, control=run.control)
+        f = sim.wall_force()
+        top.append(f[lay.top, 1].sum())
+        sides.append([-f[lay.left, 0].sum(), f[lay.right, 0].sum()])
+        segs.append([abs(f[g, 0].sum()) for g in groups])
+    p = rig.params.confining_pressure_kPa * KPA
+    w, h = rig.width(), rig.height()
+    assert np.mean(top) == pytest.approx((p + q * KPA) * w * t, rel=0.02)
+    np.testing.assert_allclose(np.mean(sides, axis=0), p * h * t, rtol=0.02)
+    np.testing.assert_allclose(np.mean(segs, axis=0), p * h / MEMBRANE * t, rtol=0.10)
+    assert np.ptp(rig.side_x("left")) > 0 or np.ptp(rig.side_x("right")) > 0   # not a rigid wall
+
+
+def test_membrane_follows_the_platens_and_resumes_identically(membrane_specimen, tmp_path):
+    """Cycles with the membrane: it keeps spanning the specimen as the platen moves, no
+    stone ball gets past it, sigma_3 is held within 5 %, and a run killed after a cycle
+    resumes to the same bytes."""
+    full = BiaxialRun(BiaxialRig.load(membrane_specimen), cycles=CYCLES,
+                      checkpoint=tmp_path / "a.npz").run()
+    rig, p = full.rig, full.rig.params
+    assert_membrane_spans_the_specimen(rig, atol=1e-4)
+    np.testing.assert_allclose(full.cyc["confining_stress_mean"], p.confining_pressure_kPa * KPA, rtol=0.05)
+    ids = rig.stone_balls()
+    x, r = rig.sim.balls.pos[ids, 0], rig.sim.balls.rad[ids]
+    assert np.all(x - r > rig.side_x("left").min() - 1e-3) and np.all(x + r < rig.side_x("right").max() + 1e-3)
+    assert np.all(np.array(full.cyc["width_max_at_end"]) >= np.array(full.cyc["width_at_end"]))
+    ck = tmp_path / "b.npz"
+    first = BiaxialRun(BiaxialRig.load(membrane_specimen), cycles=CYCLES, checkpoint=ck)
+    first.run(stop_after=1)
+    first.advance(max_steps=200)
+    resumed = BiaxialRun.from_checkpoint(ck).run()
+    for k in full.cyc:
+        assert np.array_equal(full.cyc[k], resumed.cyc[k]), k
+    assert full.s.rows == resumed.s.rows
+    assert np.array_equal(rig.sim.walls.seg, resumed.rig.sim.walls.seg)
+
+
+def test_case_assemble_takes_the_specimen_size(small_library, tmp_path, capsys):
+    """`case assemble --width-m/--height-m/--membrane-segments` (measured_sim's specimen):
+    the specimen has that size and membrane; the options are refused for the box rig."""
+    from ballaststudy.cli import main
+    out = tmp_path / "assembled.nc"
+    assert main(["case", "assemble", str(small_library), "--case", "0", "--rig", "biaxial",
+                 "--width-m", "0.12", "--height-m", "0.24", "--membrane-segments", "3",
+                 "--out", str(out), "--quiet"]) == 0
+    rig = BiaxialRig.load(out)
+    assert rig.width() == pytest.approx(0.12) and 0.2 < rig.height() <= 0.24 + 1e-9
+    assert len(rig.side_groups("left")) == len(rig.side_groups("right")) == 3
+    capsys.readouterr()
+    assert main(["case", "assemble", str(small_library), "--case", "0", "--rig", "box",
+                 "--width-m", "0.12", "--out", str(tmp_path / "box.nc"), "--quiet"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "rig.kind: box: --width-m is for a biaxial specimen" in line and "\n" not in line
+    assert not (tmp_path / "box.nc").exists()

@@ -59,12 +59,14 @@ rule measured_sim_assemble:
         f"{RESULTS}/measured_sim/specimens/case{{case}}.nc",
     params:
         assembly=json.dumps((config["rig"].get("biaxial") or {}).get("assembly") or {}, sort_keys=True),
+        size=" ".join(f"--{k.replace('_', '-')} {MEASURED_SIM[k]}" for k in ("width_m", "height_m")
+                      if MEASURED_SIM.get(k) is not None),
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/measured_sim/specimen{{case}}.log",
     shell:
         "ballaststudy case assemble {input.bpm} --case {wildcards.case} --rig biaxial "
-        "--config {params.config} --out {output} --quiet > {log} 2>&1"
+        "{params.size} --config {params.config} --out {output} --quiet > {log} 2>&1"
 
 
 rule measured_sim_run:

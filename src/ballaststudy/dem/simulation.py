@@ -186,6 +186,14 @@ class Simulation:
         self._touch()
         return ids
 
+    def set_segment_y(self, s, start=None, end=None):
+        """Move segment ``s``'s start and/or end point to height ``start`` / ``end`` (x kept):
+        a membrane segment following the platens. The neighbour lists are rebuilt."""
+        for col, y in ((1, start), (3, end)):
+            if y is not None:
+                self.walls.seg[s, col] = y
+        self._touch()
+
     def set_wall_velocity(self, ids, vel=(0.0, 0.0), omega=0.0, centre=None):
         """Kinematic motion of segments ``ids``: translation ``vel`` and rotation
         ``omega`` about ``centre`` (a point moving with the wall)."""

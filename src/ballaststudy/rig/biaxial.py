@@ -4,7 +4,10 @@ a cyclic deviator stress q). Built on the kit: deposition.py places and drops th
 dem.control runs the servos inside the engine's loop, cyclic.py keeps the records.
 
 The specimen is a rectangle of bonded stones between a bottom platen, a top platen and two
-side walls (rigid, frictionless: a membrane's confinement without its bulging). Stages:
+frictionless sides: rigid side walls (``membrane_segments`` 1), or a flexible membrane, a
+chain of ``membrane_segments`` segments per side, each under its own stress servo, so the
+specimen bulges as a real one does (the segments' heights follow the platens: each spans
+1/n of the specimen height). Stages:
 1. deposition in a tall box of the specimen's width; balls above the specimen height cut;
 2. isotropic consolidation: three stress servos (left, right, top) hold p until the
    window means of all three are within ``consolidation_tolerance`` of p;
@@ -17,6 +20,7 @@ side walls (rigid, frictionless: a membrane's confinement without its bulging). 
 compression positive from the end of consolidation: axial 1 - H/H0, volumetric (area)
 1 - W H / (W0 H0), H and W between the walls' faces.
 """
+from collections import namedtuple
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -40,6 +44,7 @@ class BiaxialParams(DepositionParams):
     width_m: float = 0.30              # 2D slice of the 300 mm x 600 mm triaxial cylinder
     height_m: float = 0.60
     membrane_friction: float = 0.0     # side walls stand for the membrane: frictionless
+    membrane_segments: int = 1         # 1: rigid side walls; n > 1: a membrane of n segments a side
     relax_steps: int = 5000
     # loading
     confining_pressure_kPa: float = 30.0
@@ -73,8 +78,10 @@ class BiaxialParams(DepositionParams):
 class BiaxialLayout:
     bottom: list = field(default_factory=list)    # wall segment ids
     top: list = field(default_factory=list)
-    left: list = field(default_factory=list)
+    left: list = field(default_factory=list)      # every segment of a side
     right: list = field(default_factory=list)
+    left_groups: list = field(default_factory=list)   # membrane: segment ids per servo, bottom up
+    right_groups: list = field(default_factory=list)
     stone_library_index: list = field(default_factory=list)
     stone_material: list = field(default_factory=list)
     n_stone_balls: int = 0
@@ -99,8 +106,20 @@ class BiaxialRig(Rig):
     def _x(self, ids):
         return float(self.sim.walls.seg[ids[0], 0])
 
+    def side_groups(self, side):
+        """Segment ids per side servo, bottom up: one group (the rigid wall) or n."""
+        lay = self.layout
+        groups = lay.left_groups if side == "left" else lay.right_groups
+        return groups or [lay.left if side == "left" else lay.right]
+
+    def side_x(self, side):
+        """x of each servo group of a side, bottom up."""
+        return np.array([self._x(g) for g in self.side_groups(side)])
+
     def width(self):
-        return self._x(self.layout.right) - self._x(self.layout.left)
+        """Mean width between the sides (area / height: the membrane's segments span equal
+        heights), as the area correction of a triaxial test."""
+        return float(np.mean(self.side_x("right") - self.side_x("left")))
 
     def height(self):
         seg = self.sim.walls.seg
@@ -134,15 +153,46 @@ def build_specimen(lib, params, seed):
                         stone_material=[int(s.material) for s in stones])
     wide = 0.6 * p.width_m       # platens reach past the side walls as these move in
     lay.bottom = sim.add_wall([(-w2 - wide, 0.0), (w2 + wide, 0.0)], material_id=PLATEN).tolist()
-    lay.left = sim.add_wall([(-w2, h_tall), (-w2, -0.05 * p.height_m)],
-                            material_id=MEMBRANE).tolist()
-    lay.right = sim.add_wall([(w2, -0.05 * p.height_m), (w2, h_tall)],
-                             material_id=MEMBRANE).tolist()
+    n = p.membrane_segments
+    ys = [h_tall] + ([] if n == 1 else list(np.linspace(p.height_m, 0.0, n + 1))) + [-0.05 * p.height_m]
+    lay.left = sim.add_wall([(-w2, y) for y in ys], material_id=MEMBRANE).tolist()
+    lay.right = sim.add_wall([(w2, y) for y in ys[::-1]], material_id=MEMBRANE).tolist()
+    if n > 1:
+        lay.left_groups = membrane_groups(lay.left[::-1])
+        lay.right_groups = membrane_groups(lay.right)
     lay.bonds_library = place_stones(sim, lib, stones, centres, rng)
     lay.n_stone_balls = len(sim.balls)
     lay.bonds_installed = int(sim.install_flat_joints({m: lib.materials[m]["fj"]
                                                       for m in (0, 1)}))
     return BiaxialRig(sim, lay, p)
+
+
+def membrane_groups(chain):
+    """Servo groups of a membrane chain given bottom up (extension below, n segments,
+    extension above): the membrane segment first, the extensions with the end segments."""
+    groups = [[k] for k in chain[1:-1]]
+    groups[0].append(chain[0])
+    groups[-1].append(chain[-1])
+    return groups
+
+
+def place_membrane(rig):
+    """Each side's n membrane segments span 1/n of the specimen height between the platens
+    (their x kept; the extensions beyond the platens follow). Returns the segment length."""
+    lay, seg = rig.layout, rig.sim.walls.seg
+    bottom, top = float(seg[lay.bottom[0], 1]), float(seg[lay.top[0], 1])
+    n = len(lay.left_groups)
+    y = np.linspace(bottom, top, n + 1)
+    for side in ("left", "right"):
+        down = side == "left"              # the left chain runs top down, the right bottom up
+        for k, group in enumerate(rig.side_groups(side)):
+            lo, hi = y[k], y[k + 1]
+            rig.sim.set_segment_y(group[0], *((hi, lo) if down else (lo, hi)))
+            if len(group) > 1:             # an extension, joined at the chain's end node
+                joint = lo if k == 0 else hi
+                starts_there = (k == 0) == down
+                rig.sim.set_segment_y(group[1], *((joint, None) if starts_there else (None, joint)))
+    return (top - bottom) / n
 
 
 def wall_friction(rig, mu):
@@ -175,6 +225,8 @@ def assemble_biaxial(lib, params, seed, progress=None):
     top = float((b.pos[ids, 1] + b.rad[ids]).max())
     w2, wide = 0.5 * p.width_m, 0.6 * p.width_m
     lay.top = sim.add_wall([(w2 + wide, top), (-w2 - wide, top)], material_id=PLATEN).tolist()
+    if lay.left_groups:
+        place_membrane(rig)
     sim.set_damping(p.damping)
     sim.run(p.relax_steps)
     st["relax"] = p.relax_steps
@@ -184,37 +236,49 @@ def assemble_biaxial(lib, params, seed, progress=None):
 
 
 # ----------------------------------------------------------------------------- loading
-AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors
-S_LEFT, S_RIGHT, S_TOP, PROFILE, SINUSOID = range(5)         # controllers
+AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors (then the segments')
+# controllers: the side servos (two rigid walls, or one per membrane segment), then these
+ControllerIds = namedtuple("ControllerIds", "sides top profile sine segment_sensors")
 
 
 def biaxial_control(rig):
-    """Stress sensors of the three moving walls, their positions, and the controllers:
-    three consolidation servos (the side ones stay on while cycling) and the profile."""
+    """Stress sensors of the moving walls (each side as a whole, and each membrane segment),
+    their positions, and the controllers: the side servos (on while cycling), the top
+    platen's consolidation servo, the profile and the sinusoid. Returns (Control, ids)."""
     p, lay, t = rig.params, rig.layout, rig.sim.thickness
     w, h = rig.width(), rig.height()
+    groups = rig.side_groups("left") + rig.side_groups("right")
     c = Control(every=p.control_every)
     c.wall_force(lay.top, axis=1, scale=1.0 / (w * t))
     c.wall_force(lay.left, axis=0, scale=-1.0 / (h * t))
     c.wall_force(lay.right, axis=0, scale=1.0 / (h * t))
     c.wall_position(lay.top, axis=1)
-    c.wall_position(lay.left, axis=0)
-    c.wall_position(lay.right, axis=0)
-    left, right, top = (c.walls(lay.left, 0), c.walls(lay.right, 0), c.walls(lay.top, 1))
+    c.wall_position([g[0] for g in rig.side_groups("left")], axis=0)
+    c.wall_position([g[0] for g in rig.side_groups("right")], axis=0)
     servo = dict(target=p.confining_pressure_kPa * KPA, gain_unit=KPA,
                  v_max=p.servo_velocity_m_s, integral_steps=p.servo_integral_steps,
                  window_steps=p.consolidation_window_steps)
-    c.servo(LEFT, left, gain=-p.servo_gain_m_s_per_kPa, **servo)     # +x raises it
-    c.servo(RIGHT, right, gain=p.servo_gain_m_s_per_kPa, **servo)
-    c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa, **servo)
+    if lay.left_groups:           # a servo per membrane segment, on its own stress
+        n, seg_len = len(lay.left_groups), h / len(lay.left_groups)
+        sensors = [c.wall_force(g, axis=0, scale=(-1.0 if k < n else 1.0) / (seg_len * t))
+                   for k, g in enumerate(groups)]
+    else:
+        sensors = [LEFT, RIGHT]
+    sides = [c.servo(sensor, c.walls(g, 0), gain=(-1.0 if k < len(groups) // 2 else 1.0)
+                     * p.servo_gain_m_s_per_kPa, **servo)       # left: +x raises its stress
+             for k, (sensor, g) in enumerate(zip(sensors, groups))]
+    top = c.walls(lay.top, 1)
+    s_top = c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa, **servo)
     sig3 = p.confining_pressure_kPa * KPA
     lo, hi = sig3 + p.deviator_min_kPa * KPA, sig3 + p.deviator_max_kPa * KPA
-    c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=p.platen_v_min_m_s, v_max=p.platen_v_max_m_s,
-             brake=p.braking_fraction, direction=-1, active=False)
-    c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
-           gain=p.realtime_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.realtime_velocity_m_s,
-           integral_steps=p.servo_integral_steps, active=False)
-    return c.build()
+    profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=p.platen_v_min_m_s,
+                       v_max=p.platen_v_max_m_s, brake=p.braking_fraction, direction=-1,
+                       active=False)
+    sine = c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
+                  gain=p.realtime_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.realtime_velocity_m_s,
+                  integral_steps=p.servo_integral_steps, active=False)
+    ids = ControllerIds(sides, s_top, profile, sine, sensors if lay.left_groups else [])
+    return c.build(), ids
 
 
 CYCLE_FIELDS = {
@@ -224,7 +288,8 @@ CYCLE_FIELDS = {
     "axial_stress_min": ("Pa", "smallest axial stress sigma_1 in the cycle"),
     "confining_stress_mean": ("Pa", "mean side-wall stress sigma_3 over the cycle (2D: force / (height t))"),
     "height_at_end": ("m", "specimen height between the platens at the end of the cycle"),
-    "width_at_end": ("m", "specimen width between the side walls at the end of the cycle"),
+    "width_at_end": ("m", "mean specimen width between the sides (area / height) at the end of the cycle"),
+    "width_max_at_end": ("m", "largest width between the sides (the membrane's bulge) at the end of the cycle"),
     "elements_broken_tension": ("1", "flat-joint elements broken in tension since loading began"),
     "elements_broken_shear": ("1", "flat-joint elements broken in shear since loading began"),
 }
@@ -254,7 +319,8 @@ class BiaxialRun(CyclicRun):
     def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
                  resumed=False):
         p = rig.params
-        super().__init__(rig, cycles, biaxial_control(rig), checkpoint,
+        control, self.ids = biaxial_control(rig)
+        super().__init__(rig, cycles, control, checkpoint,
                          checkpoint_every or p.checkpoint_every, metrics, p.max_cycle_steps)
         if p.mode not in ("quasi_static", "real_time"):
             raise ValueError(f"loading mode {p.mode!r}: quasi_static or real_time")
@@ -269,6 +335,17 @@ class BiaxialRun(CyclicRun):
         c.set_scale(LEFT, -1.0 / (h * t))
         c.set_scale(RIGHT, 1.0 / (h * t))
 
+    def advance(self, max_steps=None):
+        """A membrane follows the platens (segment heights, their stress sensors) before
+        every run of the engine (at least every control buffer: well below a mm of platen
+        travel); before, not after, so a resumed run does what an uninterrupted one does."""
+        sensors = self.ids.segment_sensors
+        if sensors:
+            seg_len, t = place_membrane(self.rig), self.rig.sim.thickness
+            for k, sensor in enumerate(sensors):
+                self.control.set_scale(sensor, (-1.0 if k < len(sensors) // 2 else 1.0) / (seg_len * t))
+        super().advance(max_steps)
+
     def on_window(self, controller):
         p, s, c = self.rig.params, self.s, self.control
         means = c.window_means()
@@ -279,7 +356,7 @@ class BiaxialRun(CyclicRun):
         sig = means[[AXIAL, LEFT, RIGHT]]
         s.window_means.append([float(v) for v in sig])
         p3 = p.confining_pressure_kPa * KPA
-        target = np.array([c.get(S_TOP, "target"), p3, p3])
+        target = np.array([c.get(self.ids.top, "target"), p3, p3])
         if np.all(np.abs(sig - target) / target < p.consolidation_tolerance):
             s.windows = 0
             if s.phase == "hold":
@@ -288,14 +365,14 @@ class BiaxialRun(CyclicRun):
             s.phase = "loading"
             s.loading_start_step = self.rig.sim.step
             s.height0, s.width0 = self.rig.height(), self.rig.width()
-            for k in (S_LEFT, S_RIGHT):        # keep p; no more windows
+            for k in self.ids.sides:        # keep p; no more windows
                 c.set(k, window_steps=np.inf)
-            c.set(S_TOP, active=False)
+            c.set(self.ids.top, active=False)
             if p.mode == "real_time":       # the sinusoid starts at p + q_min now
-                c.set(SINUSOID, active=True, t0=self.rig.sim.time, half_periods=0,
+                c.set(self.ids.sine, active=True, t0=self.rig.sim.time, half_periods=0,
                       integral=0.0)
             else:
-                c.set(PROFILE, active=True, direction=-1)
+                c.set(self.ids.profile, active=True, direction=-1)
         elif s.windows >= p.consolidation_max_windows:
             raise RuntimeError(f"{s.phase} at {', '.join(f'{v / KPA:g}' for v in target)} kPa "
                                f"not reached within {s.windows} windows (last means "
@@ -308,11 +385,11 @@ class BiaxialRun(CyclicRun):
         p, s, c = self.rig.params, self.s, self.control
         while s.phase == "consolidation":
             self.advance()
-        c.set(PROFILE, active=False)
-        c.set(SINUSOID, active=False)
-        c.set(S_TOP, active=True, integral=0.0,
+        c.set(self.ids.profile, active=False)
+        c.set(self.ids.sine, active=False)
+        c.set(self.ids.top, active=True, integral=0.0,
               target=(p.confining_pressure_kPa + q_kPa) * KPA)
-        for k in (S_LEFT, S_RIGHT, S_TOP):
+        for k in (*self.ids.sides, self.ids.top):
             c.set(k, window_steps=p.consolidation_window_steps)
         c.reset_window()
         s.phase, s.windows = "hold", 0
@@ -375,6 +452,7 @@ class BiaxialRun(CyclicRun):
                     axial_stress_max=float(sig1.max()), axial_stress_min=float(sig1.min()),
                     confining_stress_mean=float(sig3.mean()), height_at_end=rig.height(),
                     width_at_end=rig.width(),
+                    width_max_at_end=float(np.max(rig.side_x("right") - rig.side_x("left"))),
                     elements_broken_tension=int(np.sum(modes == "tension")),
                     elements_broken_shear=int(np.sum(modes == "shear")))
 
@@ -413,7 +491,7 @@ class BiaxialRun(CyclicRun):
                                   mp.contact_force_threshold, False)
         seg, lay = rig.sim.walls.seg, rig.layout
         vr = void_ratio(b.pos, b.rad, labels, nf, bd.i, bd.j, intact,
-                        rig._x(lay.left), rig._x(lay.right),
+                        rig.side_x("left").mean(), rig.side_x("right").mean(),
                         float(seg[lay.bottom[0], 1]), float(seg[lay.top[0], 1]),
                         mp.disk_quad_segs, self._solids)
         return dict(n_fragments=int(nf), mean_coordination=float(cn.mean()) if nf else np.nan,

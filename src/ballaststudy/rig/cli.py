@@ -16,7 +16,7 @@ from ..config import ConfigError, load_config
 from ..inputs import open_netcdf, writable_dir, writable_file
 from ..provenance import Recorder
 from .params import RigParams, case_seed
-from ..argtypes import SEED, integer
+from ..argtypes import SEED, integer, number
 
 
 def _kind(args, cfg):
@@ -38,7 +38,13 @@ def _case_assemble(args):
     from .library import load_library
     writable_file(args.out)
     cfg, params = _params(args)
-    assemble = assemble_biaxial if _kind(args, cfg) == "biaxial" else assemble
+    biaxial = _kind(args, cfg) == "biaxial"
+    assemble = assemble_biaxial if biaxial else assemble
+    for key in ("width_m", "height_m", "membrane_segments"):       # a specimen other than the config's
+        if getattr(args, key) is not None:
+            if not biaxial:
+                raise ConfigError(args.config, "rig.kind", f"{_kind(args, cfg)}: --{key.replace('_', '-')} is for a biaxial specimen")
+            setattr(params, key, getattr(args, key))
     lib = load_library(args.library)
     seed = args.seed if args.seed is not None else case_seed(cfg["seed"], lib.database, args.case)
     recorder = Recorder("case assemble", inputs=(args.library, args.config),
@@ -168,6 +174,10 @@ def register(subparsers):
     a.add_argument("--out", required=True, type=Path, help="assembled state (.nc)")
     a.add_argument("--seed", type=SEED, help="override the seed derived from (study seed, database, case)")
     a.add_argument("--rig", choices=("box", "biaxial"), help="override the config's rig.kind")
+    a.add_argument("--width-m", dest="width_m", type=number(0.01, 100), help="biaxial: specimen width (config's)")
+    a.add_argument("--height-m", dest="height_m", type=number(0.01, 100), help="biaxial: specimen height (config's)")
+    a.add_argument("--membrane-segments", dest="membrane_segments", type=integer(1, 40),
+                   help="biaxial: 1 rigid side walls, n > 1 a membrane of n segments a side (config's)")
     a.add_argument("--config", default="config/config.yaml", type=Path)
     a.add_argument("--quiet", action="store_true")
     a.set_defaults(func=_case_assemble)

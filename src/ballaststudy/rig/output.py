@@ -81,7 +81,8 @@ def write_figures(run, ds, out, what=""):
     plot_case(run.rig, out.with_name("case.png"), breakage_records(run),
               title=f"{ds.attrs['database']} seed {ds.attrs['seed']}: {what}after "
                     f"{ds.sizes['cycle']} cycles (black hard, grey soft)")
-    plot_behaviours(ds, out.with_name("behaviours.png"))
+    if ds.sizes["cycle"]:       # a specimen that failed in its first loading has no curve
+        plot_behaviours(ds, out.with_name("behaviours.png"))
 
 
 def write_outputs(run, out, figures=True, attrs=None):
