@@ -48,7 +48,8 @@ def compare_dataset(measured_path, case_paths):
         "simulated_seeds": ", ".join(str(ds.attrs.get("seed", "")) for ds in cases),
         "simulated_failures": "; ".join(f"case {k}: {ds.attrs['failure']}" for k, ds in enumerate(cases)
                                         if ds.attrs.get("failed")) or "none",
-        "comparison_note": "simulated cycle k (0-based) is plotted at N = k + 1; simulated "
+        "comparison_note": "simulated cycle k (0-based) is plotted at N = k + 1 (cycle 0 is "
+                           "the first loading to p + q_max and unloading, as N = 1 of the test); simulated "
                            "strains are 2D (volumetric = area strain) from the end of "
                            "consolidation; measured from the start of the test"})
     return xr.Dataset(data, coords={

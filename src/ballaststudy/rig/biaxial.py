@@ -15,7 +15,8 @@ specimen bulges as a real one does (the segments' heights follow the platens: ea
    sigma_1 = p + q between p + q_min and p + q_max — quasi-static: the bound-to-bound
    profile at the configured platen speeds, with density scaling (loading_dt_factor);
    real-time: true masses, a stress servo following a sinusoid at the test's frequency f
-   in simulated time (a cycle lasts 1/f).
+   in simulated time (a cycle lasts 1/f). Cycle 0 is the first loading from p to p + q_max
+   and the unloading to p + q_min: load cycle N = 1 of a laboratory test.
 2D stresses are forces per boundary length per thickness t (sigma = F / (L t)); strains are
 compression positive from the end of consolidation: axial 1 - H/H0, volumetric (area)
 1 - W H / (W0 H0), H and W between the walls' faces.
@@ -314,6 +315,7 @@ class BiaxialRun(CyclicRun):
     CHANNELS = {"axial_stress": AXIAL, "left_stress": LEFT, "right_stress": RIGHT,
                 "platen_y": HEIGHT, "left_x": X_LEFT, "right_x": X_RIGHT}
     CYCLE_FIELDS = CYCLE_FIELDS
+    CYCLING = ("loading", "cyclic")     # the first loading is cycle 0
     State = BiaxialState
 
     def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
@@ -364,6 +366,7 @@ class BiaxialRun(CyclicRun):
                 return
             s.phase = "loading"
             s.loading_start_step = self.rig.sim.step
+            self._start_cycle()                 # the first loading is load cycle N = 1
             s.height0, s.width0 = self.rig.height(), self.rig.width()
             for k in self.ids.sides:        # keep p; no more windows
                 c.set(k, window_steps=np.inf)
@@ -431,10 +434,12 @@ class BiaxialRun(CyclicRun):
         s.phase = "done"
 
     def _trough(self):
-        """The first trough after consolidation starts cycle 0 (the platen has loaded to
-        p + q_max and unloaded to p + q_min once: the profile starts at the bound)."""
+        """The first trough after consolidation ends cycle 0 (N = 1 of a laboratory test: the
+        first loading from p to p + q_max and the unloading to p + q_min)."""
         self._rescale()
         self.s.peak_stress = 0.0        # each loading branch is watched for softening anew
+        if self.s.phase == "loading":
+            self.s.phase = "cyclic"
         super()._trough()
 
     def strains(self):

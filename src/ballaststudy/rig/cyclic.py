@@ -37,6 +37,7 @@ class CycleState:
 class CyclicRun:
     CHANNELS = {}
     CYCLE_FIELDS = {}
+    CYCLING = ("cyclic",)           # phases whose samples belong to the current cycle
     State = CycleState
 
     def __init__(self, rig, cycles, control, checkpoint=None, checkpoint_every=1,
@@ -89,7 +90,7 @@ class CyclicRun:
                                f"{self.max_cycle_steps} steps")
 
     def _book_samples(self, rows):
-        label = self.s.cycle if self.s.phase == "cyclic" else -1
+        label = self.s.cycle if self.s.phase in self.CYCLING else -1
         self.samples["step"].extend(int(v) for v in rows[:, 0])
         self.samples["cycle"].extend([label] * len(rows))
         for name, sensor in self.CHANNELS.items():
