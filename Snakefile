@@ -48,9 +48,11 @@ RESULTS = config["results_dir"]
 
 include: "workflow/rules/forms.smk"
 include: "workflow/rules/bpm.smk"
-include: "workflow/rules/cases.smk"
-include: "workflow/rules/study.smk"
 include: "workflow/rules/measured.smk"
+include: "workflow/rules/calibration.smk"
+include: "workflow/rules/cases.smk"
+include: "workflow/rules/parametric.smk"
+include: "workflow/rules/study.smk"
 
 
 rule all:

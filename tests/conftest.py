@@ -43,3 +43,13 @@ def small_database(tmp_path_factory):
     with xr.open_dataset(nc) as ds:
         ds = ds.load()
     return nc, ds, definition
+
+
+@pytest.fixture(scope="session")
+def small_library(tmp_path_factory):
+    """A synthetic BPM library of 24 coarse stones (8 mm balls) in the bpm package's format:
+    the rig and calibration tests' specimens."""
+    from ballaststudy.rig.library import synthetic_library
+    path = tmp_path_factory.mktemp("bpm") / "BPM.nc"
+    synthetic_library(24, size=(0.035, 0.065), r0=0.008, seed=3, database="tiny").to_netcdf(path)
+    return path

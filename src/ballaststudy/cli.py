@@ -16,6 +16,7 @@ from .forms.objective import ObjectiveError
 from .forms.validate import SUMMARY_COLUMNS, validation_row
 from .inputs import input_dir, input_file, open_netcdf, writable_dir, writable_file
 from .bpm.cli import register as register_bpm
+from .calibration.cli import register as register_calibrate
 from .measured.cli import register as register_measured
 from .rig.cli import register as register_case
 from .study.cli import register as register_study
@@ -106,9 +107,12 @@ def _config_check(args):
     cfg = load_config(args.config)
     dbs = load_databases(cfg["databases_file"], form_params(cfg))
     names = select_databases(cfg, dbs, args.config)
-    tests = sorted(Path(cfg["measured"]["tests_dir"]).rglob("*.yaml"))
+    from .calibration.cli import check_target
+    tests_dir = Path(cfg["measured"]["tests_dir"])
+    tests = sorted(tests_dir.rglob("*.yaml"))
     for test in tests:
         load_conditions(test)
+    check_target(cfg, args.config, [str(t.relative_to(tests_dir).with_suffix("")) for t in tests])
     print(f"{args.config}: ok ({len(names)} databases: {', '.join(names)}; {len(tests)} measured tests)")
 
 
@@ -168,6 +172,7 @@ def build_parser():
     register_case(sub)
     register_study(sub)
     register_measured(sub)
+    register_calibrate(sub)
 
     c = sub.add_parser("config", help="configuration")
     cs = c.add_subparsers(dest="action", required=True)

@@ -27,6 +27,8 @@ ORDERED_PAIRS = (
     ("rig.biaxial.loading", "deviator_min_kPa", "deviator_max_kPa", True),
     ("rig.biaxial.loading", "platen_v_min_m_s", "platen_v_max_m_s", False),
     ("bpm", "radius_min_mm", "radius_max_mm", False),
+    ("calibration.parameters.F_str_co", "min", "max", True),
+    ("calibration.parameters.mu", "min", "max", True),
 )
 
 
@@ -43,6 +45,8 @@ def _default(section, key):
         from .bpm.params import BpmParams
         d = {f.name: f.default for f in fields(BpmParams)}
         return d[key.removesuffix("_mm")] * 1e3 if key.endswith("_mm") else d.get(key)
+    if section.startswith("calibration"):
+        return None                 # required by the schema where they apply
     if section.startswith("rig.biaxial"):
         from .rig.biaxial import BiaxialParams as cls
     else:

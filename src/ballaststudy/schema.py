@@ -22,7 +22,10 @@ class ConfigError(ValueError):
 
     def __init__(self, file, key, message):
         super().__init__(f"{file}: {key}: {message}" if key else f"{file}: {message}")
-        self.file, self.key = str(file), key
+        self.file, self.key, self.message = str(file), key, message
+
+    def __reduce__(self):           # raised in a worker process, re-raised in the parent
+        return ConfigError, (self.file, self.key, self.message)
 
 
 def schema_path(name):

@@ -39,6 +39,7 @@ ROWS = {
     "measured import": "measured import {conditions:yaml} --out {out:file_out} --data-dir {data:dir}",
     "measured compare": "measured compare {measured:nc} {metrics:nc} --out {out:file_out}",
     "config check": "config check --config {config:yaml}",
+    "parametric report": "parametric report {metrics:nc} --out-dir {out:dir_out}",
     "forms evaluate": "forms evaluate {stl:stl} --density 2650",
 }
 # the checkpoint `case run` resumes from: not an argument, it sits beside --out

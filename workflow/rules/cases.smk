@@ -1,7 +1,9 @@
 # Stage 3: box-test cases (thesis 4.2.2, 4.2.3): one assembly and one loading run per
 # (database, case). Inputs: the bpm stage's library results/bpm/{db}.nc.
 # Config: rig.box.assembly and rig.box.loading (each stage reruns when its section is
-# edited); cases per database: study.cases_per_database (default 10, as in the thesis).
+# edited); cases per database: study.cases_per_database (default 10, as in the thesis);
+# material parameters: study.parameters (table_4_2, or calibrated: the calibrate target's
+# calibrated.yaml, so the study follows the calibration).
 import json
 
 from ballaststudy.rig.params import RigParams
@@ -29,9 +31,13 @@ rule case_assemble:
         "--out {output} --quiet > {log} 2>&1"
 
 
+CALIBRATED = config["study"]["parameters"] == "calibrated"   # else Table 4.2's
+
+
 rule case_run:
     input:
-        f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
+        assembled=f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
+        parameters=[f"{CAL_OUT}/calibrated.yaml"] if CALIBRATED else [],
     output:
         metrics=f"{RESULTS}/cases/{{db}}/case{{case}}/metrics.nc",
         case_png=f"{RESULTS}/cases/{{db}}/case{{case}}/case.png",
@@ -40,13 +46,14 @@ rule case_run:
         loading=box_stage("loading"),   # editing the loading or metrics section: rerun the loading
         metrics=json.dumps(config.get("metrics", {}), sort_keys=True),
         cycles=RigParams.from_config(config.get("rig")).cycles,
+        parameters=f"--parameters {CAL_OUT}/calibrated.yaml" if CALIBRATED else "",
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/cases/{{db}}/case{{case}}_run.log",
     shell:
         # a rerun after an interruption resumes from metrics.checkpoint.npz beside the output
-        "ballaststudy case run {input} --cycles {params.cycles} --config {params.config} "
-        "--out {output.metrics} --quiet > {log} 2>&1"
+        "ballaststudy case run {input.assembled} --cycles {params.cycles} {params.parameters} "
+        "--config {params.config} --out {output.metrics} --quiet > {log} 2>&1"
 
 
 rule cases_all:

@@ -74,6 +74,16 @@ class BiaxialParams(DepositionParams):
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
     max_cycle_steps: int = 5000000
 
+    def take_conditions(self, c):
+        """A measured test's loading conditions (``measured.importer.load_conditions``):
+        p, the q bounds, f."""
+        self.confining_pressure_kPa = c["confining_pressure_kPa"]
+        self.deviator_max_kPa = c["deviator_max_kPa"]
+        if c.get("deviator_min_kPa") is not None:
+            self.deviator_min_kPa = c["deviator_min_kPa"]
+        if c.get("frequency_Hz") is not None:
+            self.frequency_Hz = c["frequency_Hz"]
+
 
 @dataclass
 class BiaxialLayout:

@@ -6,6 +6,7 @@ test or the cyclic biaxial test; ``--rig`` overrides) from a BPM library and loa
 
 ``register(subparsers)`` adds the ``case`` stage to the main parser (wired in cli.py).
 """
+import json
 import sys
 import time
 from pathlib import Path
@@ -88,12 +89,7 @@ def _measured_conditions(args, kind, params):
         if c["rig"] not in ("triaxial", "biaxial"):
             raise ConfigError(args.conditions, "rig", f"{c['rig']}: a biaxial case runs "
                               "triaxial or biaxial conditions")
-        params.confining_pressure_kPa = c["confining_pressure_kPa"]
-        params.deviator_max_kPa = c["deviator_max_kPa"]
-        if c.get("deviator_min_kPa") is not None:
-            params.deviator_min_kPa = c["deviator_min_kPa"]
-        if c.get("frequency_Hz") is not None:
-            params.frequency_Hz = c["frequency_Hz"]
+        params.take_conditions(c)
 
 
 def _case_run(args):
@@ -105,10 +101,14 @@ def _case_run(args):
     cfg, params = _params(args, kind)
     if args.conditions or args.mode:
         _measured_conditions(args, kind, params)
+    material = {}
+    if args.parameters:
+        from ..calibration.parameters import load_calibrated
+        material = load_calibrated(args.parameters)
     recorder = Recorder("case run", inputs=(args.assembled, args.config,
-                                            *([args.conditions] if args.conditions else [])),
+                                            *[p for p in (args.conditions, args.parameters) if p]),
                         params={"cycles": args.cycles, "rig": params.to_dict(),
-                                "metrics": cfg.get("metrics")})
+                                "metrics": cfg.get("metrics"), "material_parameters": material})
     if ckpt.exists() and not args.restart:
         run = run_class.from_checkpoint(ckpt, cycles=args.cycles,
                                         checkpoint_every=args.checkpoint_every)
@@ -120,6 +120,9 @@ def _case_run(args):
         except (ValueError, KeyError, TypeError) as err:
             raise ConfigError(args.assembled, None, f"not an assembled case ({err})") from None
         rig.params = params
+        if material:                    # calibrated values instead of Table 4.2's
+            from ..calibration.parameters import apply_parameters
+            apply_parameters(rig, material)
         run = run_class(rig, args.cycles, checkpoint=ckpt,
                         checkpoint_every=args.checkpoint_every, metrics=cfg.get("metrics"))
     vtk_dir = None if args.no_vtk else writable_dir(out.with_name("vtk"))
@@ -151,6 +154,8 @@ def _case_run(args):
     attrs = {"assembled_file": str(args.assembled)}
     if args.conditions:
         attrs["measured_conditions_file"] = str(args.conditions)
+    attrs["material_parameters"] = (f"calibrated ({args.parameters}): {json.dumps(material)}"
+                                    if material else "table_4_2")
     write_outputs(run, out, figures=not args.no_figures, attrs=attrs)
     if getattr(run.s, "failure", ""):     # a result (recorded in the file), not an error
         print(f"ballaststudy: note: {out}: {run.s.failure} (after {run.s.cycle} cycles)", file=sys.stderr)
@@ -195,6 +200,8 @@ def register(subparsers):
                    "p, q bounds and f (its conditions YAML)")
     r.add_argument("--mode", choices=("quasi_static", "real_time"), help="biaxial: override "
                    "the loading mode")
+    r.add_argument("--parameters", type=Path, help="a calibrated.yaml (ballaststudy calibrate): "
+                   "its parameters instead of Table 4.2's (a fresh run; a resumed one keeps its own)")
     r.add_argument("--config", default="config/config.yaml", type=Path)
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_case_run)

@@ -167,7 +167,7 @@ def _at_scale(findings, study):
     return findings
 
 
-def _three_way(lo, hi):
+def three_way(lo, hi):
     """holds if the interval lies above 0, does not hold if below, else not decidable."""
     if not (np.isfinite(lo) and np.isfinite(hi)):
         return UNDECIDED
@@ -198,7 +198,7 @@ def _settlement_jump(ctx, target):
     stat = boot[:, i] - JUMP_FACTOR * np.max(boot[:, js], axis=1)
     lo, hi = stats.interval(stat)
     point = s.loc[target, "settlement_final"] - JUMP_FACTOR * s.loc[others, "settlement_final"].max()
-    return _finding(f"jump_{target}", claim, _three_way(lo, hi), rule,
+    return _finding(f"jump_{target}", claim, three_way(lo, hi), rule,
                     f"S({target}) = {_fmt(s.loc[target, 'settlement_final'])} m, max of others = "
                     f"{_fmt(s.loc[others, 'settlement_final'].max())} m; statistic {_fmt(point)} m "
                     f"[{_fmt(lo)}, {_fmt(hi)}]")
@@ -294,7 +294,7 @@ def _fpa_finding(ctx):
     boot = ctx["boot"]("fpa_variability")
     ih, il = [ctx["index"][d] for d in high], [ctx["index"][d] for d in low]
     lo, hi = stats.interval(np.min(boot[:, ih], axis=1) - np.max(boot[:, il], axis=1))
-    return _finding("fpa_stability", claim, _three_way(lo, hi), rule,
+    return _finding("fpa_stability", claim, three_way(lo, hi), rule,
                     f"variability (deg): high fines {', '.join(f'{d} {_fmt(s.fpa_variability[d])}' for d in high)}; "
                     f"max of the others {_fmt(s.fpa_variability[low].max())}; statistic "
                     f"{_fmt(s.fpa_variability[high].min() - s.fpa_variability[low].max())} [{_fmt(lo)}, {_fmt(hi)}]")

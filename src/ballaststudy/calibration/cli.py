@@ -1,0 +1,193 @@
+"""`ballaststudy calibrate`: the config's parameters (section ``calibration``) fitted to one
+measured test with the biaxial rig (thesis 4.3, automated).
+
+    ballaststudy calibrate results/measured/<target>.nc --conditions config/measured/<target>.yaml
+        --specimens S0.nc S1.nc ... --out-dir results/calibration/<target> [--jobs 2]
+
+Every check (bounds, the measured points within the simulated cycles, K = the specimens)
+before any case runs; finished cases are reused (runner.py), so an interrupted calibration
+resumes. Writes evaluations.nc, posterior.nc, calibrated.yaml, curves.png, corner.png and
+summary.md into the folder."""
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..argtypes import integer, number
+from ..config import ConfigError, load_config
+from ..inputs import input_file, open_netcdf, writable_dir, writable_file
+
+METHOD = ("Gaussian-process surrogate of the ensemble-mean curve (scikit-learn, BSD-3), "
+          "uniform prior in the bounds, Gaussian likelihood with the ensemble's pooled "
+          "case-to-case variance x (1 + 1/K) + measurement_sd^2 + the surrogate's variance; "
+          "Latin-hypercube design, then rounds drawn from the posterior (space filling)")
+
+
+def write_netcdf(ds, path):
+    from ..atomic import atomic_path
+    with atomic_path(path) as tmp:        # creates the folder; a partial file never stays
+        ds.to_netcdf(tmp)
+
+
+def check_target(cfg, config_file, tests):
+    """calibration.target must be one of the measured tests (names relative to
+    measured.tests_dir, without .yaml) when there are any."""
+    target = cfg["calibration"]["target"]
+    if tests and target not in tests:
+        raise ConfigError(config_file, "calibration.target", f"{target!r} is not a measured test under "
+                          f"{cfg['measured']['tests_dir']}; allowed: {', '.join(tests)}")
+
+
+def measured_points(args, cal):
+    """(N, values) of the measured curve within the simulated cycles; ConfigError if fewer
+    than two."""
+    ds = open_netcdf(args.measured, "measured")
+    q = cal["quantity"]
+    if q not in ds:
+        raise ConfigError(args.measured, q, f"the test has no {q} curve; allowed: "
+                          f"{', '.join(v for v in ds.data_vars)}")
+    n, y = ds["cycle"].values, ds[q].values
+    keep = np.isfinite(y) & (n >= 1) & (n <= cal["cycles"])
+    if keep.sum() < 2:
+        second = np.sort(n[np.isfinite(y) & (n >= 1)])[1:2]
+        raise ConfigError(args.config, "calibration.cycles",
+                          f"{cal['cycles']} cycles hold {int(keep.sum())} measured point(s) of "
+                          f"{args.measured}; allowed: at least the second point's N "
+                          f"({second[0]:.0f})" if second.size else "the test has < 2 points")
+    return n[keep], y[keep]
+
+
+def _calibrate(args):
+    from ..provenance import Recorder
+    from ..rig.biaxial import BiaxialRig
+    from .bayes import calibrate, rmse
+    from .parameters import PARAMETERS
+    from .report import (calibrated_yaml, evaluations_dataset, plot_corner, plot_curves,
+                         posterior_dataset, summary_markdown)
+    from .runner import Evaluator
+    out = writable_dir(args.out_dir)
+    cfg = load_config(args.config)
+    cal = cfg["calibration"]
+    if len(args.specimens) != cal["cases"]:
+        raise ConfigError(args.config, "calibration.cases", f"{cal['cases']} but "
+                          f"{len(args.specimens)} specimens given; allowed: one specimen per case")
+    input_file(args.conditions, "expected the test's conditions YAML")
+    points, y = measured_points(args, cal)
+    names = list(cal["parameters"])
+    lower = np.array([cal["parameters"][k]["min"] for k in names], float)
+    upper = np.array([cal["parameters"][k]["max"] for k in names], float)
+    rig = BiaxialRig.from_dataset(open_netcdf(args.specimens[0], "assembled"), "engine_checkpoint")
+    table = {k: PARAMETERS[k].table_4_2(rig) for k in names}
+    t_before = np.array([table[k] for k in names])
+    inside = bool(np.all((t_before >= lower) & (t_before <= upper)))
+    recorder = Recorder("calibrate", inputs=(args.measured, args.conditions, args.config, *args.specimens),
+                        params={"calibration": cal})
+    evaluate = Evaluator(names, args.specimens, args.conditions, args.config, cal["cycles"],
+                         cal["quantity"], points, out, jobs=args.jobs, progress=not args.quiet)
+    t0 = time.time()
+    res = calibrate(evaluate, y, lower, upper, cal["initial_design"], cal["iterations"],
+                    cal["batch"], seed=cfg["seed"], include=t_before if inside else None,
+                    measurement_var=cal["measurement_sd"] ** 2, n_samples=cal["posterior_samples"])
+    rounds = list(res.rounds)
+    if not inside:                          # Table 4.2 outside the prior: evaluated apart
+        evaluate(t_before[None])
+        rounds.append(-2)
+    evaluate(res.posterior.mean[None])      # the calibrated set, from DEM runs
+    rounds.append(-1)
+    before = 0 if inside else len(rounds) - 2
+    ds = evaluations_dataset(names, evaluate.sets, rounds, points, y, cal["cycles"], cal["quantity"],
+                             {"target": str(args.measured), "method": METHOD})
+    at = ds[cal["quantity"] + "_at_points"].values
+    summary = dict(
+        target=str(args.measured), quantity=cal["quantity"], cycles=cal["cycles"], cases=cal["cases"],
+        points=int(points.size), method=METHOD, table_4_2=table,
+        rmse_before=rmse(at[before].mean(axis=0), y), rmse_after=rmse(at[-1].mean(axis=0), y),
+        dem_cases=len(evaluate.sets) * cal["cases"], sets=len(evaluate.sets),
+        failed_cases=int(ds["failed"].sum()), ess=float(res.posterior.ess),
+        minutes=round((time.time() - t0) / 60, 1))
+    summary["prior_coverage"] = {k: float((b - a) / (hi - lo)) for k, (a, b), lo, hi
+                                 in zip(names, res.posterior.interval90, lower, upper)}
+    summary["correlation"] = {f"{a}~{b}": float(res.posterior.correlation[i, j])
+                              for i, a in enumerate(names) for j, b in enumerate(names) if i < j}
+    files = {k: out / k for k in ("evaluations.nc", "posterior.nc", "calibrated.yaml",
+                                  "curves.png", "corner.png", "summary.md")}
+    write_netcdf(ds, files["evaluations.nc"])
+    write_netcdf(posterior_dataset(names, res.posterior, {"target": str(args.measured), "method": METHOD}),
+                 files["posterior.nc"])
+    calibrated_yaml(files["calibrated.yaml"], names, res.posterior,
+                    {k: v for k, v in summary.items() if k != "correlation"})
+    plot_curves(files["curves.png"], ds, cal["quantity"], before, len(rounds) - 1,
+                f"{Path(args.measured).stem}: Table 4.2 (RMSE {summary['rmse_before']:.4f}) vs "
+                f"calibrated (RMSE {summary['rmse_after']:.4f})")
+    plot_corner(files["corner.png"], names, res.posterior, res.thetas, lower, upper)
+    summary_markdown(files["summary.md"], Path(args.measured).stem, names, res.posterior, summary)
+    recorder.finish()
+    cases = [out / "cases" / st["key"] / f"case{k}.nc"       # this run's sets (the folder
+             for st in evaluate.sets for k in range(cal["cases"])]   # may cache older ones)
+    recorder.write_beside(files["calibrated.yaml"],
+                          also=[f for k, f in files.items() if k != "calibrated.yaml"] + cases)
+    if not args.quiet:
+        print(f"wrote {out}: {summary['dem_cases']} DEM cases, RMSE {summary['rmse_before']:.4g} -> "
+              f"{summary['rmse_after']:.4g}")
+
+
+def _setting(args):
+    """A calibrated.yaml of one varied parameter (the parametric study's runs)."""
+    import yaml
+
+    from ..atomic import atomic_path
+    from .parameters import PARAMETERS
+    out = writable_file(args.out)
+    if args.name not in PARAMETERS:
+        raise ConfigError(args.out, "parameters", f"{args.name}: unknown; allowed: {', '.join(PARAMETERS)}")
+    with atomic_path(out) as tmp:
+        tmp.write_text(yaml.safe_dump({"parameters": {args.name: args.value}}))
+
+
+def _parametric_report(args):
+    from ..provenance import Recorder
+    from .parametric import (cases_per_value, findings, parametric_dataset, plot_parameter,
+                             report_markdown, slope_table)
+    out = writable_dir(args.out_dir)
+    recorder = Recorder("parametric report", inputs=[input_file(p, "expected a netCDF file") for p in args.cases])
+    ds = parametric_dataset(args.cases)
+    cases = cases_per_value(ds)
+    cycles = ds.sizes["cycle"]
+    table = slope_table(ds)
+    marks = findings(table, cases, cycles)
+    files = [out / "parametric.nc", out / "report.md"]
+    write_netcdf(ds, files[0])
+    report_markdown(files[1], table, marks, cases, cycles)
+    for name in sorted(set(ds["parameter"].values)):
+        files.append(out / f"{name}.png")
+        plot_parameter(files[-1], ds, name)
+    recorder.finish()
+    recorder.write_beside(files[1], also=[files[0], *files[2:]])
+    if not args.quiet:
+        print(f"wrote {out}: " + "; ".join(f"{m['finding']}: {m['mark']}" for m in marks))
+
+
+def register(subparsers):
+    p = subparsers.add_parser("parametric", help="the parametric study's settings and report (thesis 4.4)")
+    ps = p.add_subparsers(dest="action", required=True)
+    s = ps.add_parser("setting", help="a calibrated.yaml varying one parameter")
+    s.add_argument("name", help="F_str_co or mu")
+    s.add_argument("value", type=number(1e-9, 1000))
+    s.add_argument("--out", required=True, type=Path)
+    s.set_defaults(func=_setting)
+    r = ps.add_parser("report", help="slopes, sensitivity, the thesis' findings, figures")
+    r.add_argument("cases", nargs="+", type=Path, help="metrics.nc of the parametric runs")
+    r.add_argument("--out-dir", required=True, type=Path)
+    r.add_argument("--quiet", action="store_true")
+    r.set_defaults(func=_parametric_report)
+    c = subparsers.add_parser("calibrate", help="fit the config's parameters to a measured test (thesis 4.3)")
+    c.add_argument("measured", type=Path, help="the test's netCDF (measured import)")
+    c.add_argument("--conditions", required=True, type=Path, help="the test's conditions YAML")
+    c.add_argument("--specimens", required=True, nargs="+", type=Path,
+                   help="K assembled biaxial specimens (case assemble --rig biaxial)")
+    c.add_argument("--out-dir", required=True, type=Path)
+    c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
+    c.add_argument("--config", default="config/config.yaml", type=Path)
+    c.add_argument("--quiet", action="store_true")
+    c.set_defaults(func=_calibrate)
+    return c

@@ -1,0 +1,131 @@
+"""The model a calibration evaluates: one parameter set = K biaxial cases, the same K
+assembled specimens loaded under the measured test's conditions with the set's parameters.
+Cases run in parallel processes; each finished case is a metrics.nc under
+``cases/<hash of the set>/case<k>.nc`` (with its checkpoint while it runs), so an
+interrupted calibration resumes without repeating finished cases.
+
+The simulated curve of cycle k (0-based) is the measured N = k + 1 (cycle 0 is the first
+loading); it is compared at the measured points N <= cycles, interpolated in ln N. A case
+that failed (its strain ran away, ``metrics.nc`` attribute ``failed``) has no rows past its
+failure: its strain there is censored at the failure strain (at least that, or its last
+value if larger) - a set that fails the specimen fits a measured curve that did not fail
+badly, as it should."""
+import hashlib
+import json
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from ..inputs import open_netcdf
+
+
+def set_key(values, context):
+    """A short hash of a parameter set (rounded to 12 significant digits) and what else
+    decides its cases (cycles, conditions, specimens, config): the cache folder's name."""
+    text = json.dumps({"values": {k: float(f"{v:.12g}") for k, v in sorted(values.items())},
+                       **context}, sort_keys=True)
+    return hashlib.sha1(text.encode()).hexdigest()[:12]
+
+
+def run_case(job):
+    """One case: load the assembled specimen, apply the parameters and the rig's parameters
+    (the config's with the test's conditions), run
+    ``cycles`` cycles (resuming from its checkpoint), write metrics.nc. Returns its path."""
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    from ..rig.biaxial import BiaxialParams, BiaxialRig, BiaxialRun, write_biaxial_outputs
+    from .parameters import apply_parameters
+    out = Path(job["out"])
+    if out.is_file():
+        return str(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    ckpt = out.with_name(out.stem + ".checkpoint.npz")
+    if ckpt.is_file():
+        run = BiaxialRun.from_checkpoint(ckpt, cycles=job["cycles"])
+    else:
+        params = BiaxialParams(**job["rig"])
+        rig = BiaxialRig.from_dataset(open_netcdf(job["specimen"], "assembled"), "engine_checkpoint")
+        rig.params = params
+        apply_parameters(rig, job["values"])
+        run = BiaxialRun(rig, job["cycles"], checkpoint=ckpt)
+    run.run()
+    write_biaxial_outputs(run, out, figures=False, attrs={
+        "assembled_file": str(job["specimen"]), "measured_conditions_file": str(job["conditions"]),
+        "calibration_parameters_json": json.dumps(job["values"])})
+    ckpt.unlink(missing_ok=True)
+    return str(out)
+
+
+def case_curve(metrics_path, quantity, cycles):
+    """(cycles,) curve of a case; a failed case's missing cycles censored (module doc)."""
+    ds = open_netcdf(metrics_path, "metrics")
+    rows = ds[quantity].values if quantity in ds else np.zeros(0)
+    curve = np.empty(cycles)
+    curve[:rows.size] = rows[:cycles]
+    if rows.size < cycles:
+        if not ds.attrs.get("failed"):
+            raise ValueError(f"{metrics_path}: {rows.size} of {cycles} cycles and not failed")
+        prm = json.loads(ds.attrs["rig_params_json"])
+        last = rows[-1] if rows.size else -np.inf
+        curve[rows.size:] = max(prm["failure_axial_strain"], last)
+    return curve, bool(ds.attrs.get("failed"))
+
+
+def at_points(curve, points):
+    """The curve of cycles N = 1..len(curve) at the measured N (1 <= N <= len), in ln N."""
+    n = np.arange(1, curve.size + 1, dtype=float)
+    return np.interp(np.log(points), np.log(n), curve)
+
+
+class Evaluator:
+    """``evaluate(thetas) -> [(K, P) curves at the measured points]`` for calibrate(); keeps
+    every set's folder, its full curves and its failures (``self.sets``)."""
+
+    def __init__(self, names, specimens, conditions, config, cycles, quantity, points,
+                 out_dir, jobs=1, progress=False):
+        self.names, self.specimens = list(names), [str(s) for s in specimens]
+        self.conditions = str(conditions)
+        self.cycles, self.quantity, self.points = int(cycles), quantity, np.asarray(points)
+        self.out_dir, self.jobs, self.progress = Path(out_dir), int(jobs), progress
+        from ..config import load_config
+        from ..measured.importer import load_conditions
+        from ..rig.biaxial import BiaxialParams
+        params = BiaxialParams.from_config(load_config(config).get("rig", {}))
+        params.take_conditions(load_conditions(conditions))
+        self.rig = params.to_dict()       # read once: a config edited meanwhile changes nothing
+        self.context = {"cycles": self.cycles, "rig": self.rig,
+                        "specimens": [Path(s).name for s in self.specimens]}
+        self.sets = []        # per evaluated set: dict(values, key, curves (K, cycles), failed)
+
+    def jobs_for(self, values):
+        key = set_key(values, self.context)
+        return key, [dict(specimen=s, values=values, cycles=self.cycles, rig=self.rig,
+                          conditions=self.conditions,
+                          out=str(self.out_dir / "cases" / key / f"case{k}.nc"))
+                     for k, s in enumerate(self.specimens)]
+
+    def __call__(self, thetas):
+        batch = [dict(zip(self.names, map(float, t))) for t in np.atleast_2d(thetas)]
+        keyed = [self.jobs_for(v) for v in batch]
+        jobs = [j for _, js in keyed for j in js]
+        bar = tqdm(total=len(jobs), desc=f"{len(batch)} parameter set(s)", unit="case",
+                   disable=not self.progress)
+        if self.jobs > 1 and len(jobs) > 1:
+            with ProcessPoolExecutor(self.jobs) as pool:
+                for done in as_completed([pool.submit(run_case, j) for j in jobs]):
+                    done.result()
+                    bar.update()
+        else:
+            for j in jobs:
+                run_case(j)
+                bar.update()
+        bar.close()
+        out = []
+        for values, (key, js) in zip(batch, keyed):
+            curves, failed = zip(*(case_curve(j["out"], self.quantity, self.cycles) for j in js))
+            curves = np.array(curves)
+            self.sets.append(dict(values=values, key=key, curves=curves, failed=list(failed)))
+            out.append(np.array([at_points(c, self.points) for c in curves]))
+        return out

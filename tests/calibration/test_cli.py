@@ -1,0 +1,146 @@
+"""Bad input to the calibration, each one line naming file, key and what is allowed, exit 2,
+before any case runs: through `config check` (what the workflow reads first), the
+Snakefile (a dry run) and `ballaststudy calibrate` itself."""
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+import yaml
+
+from ballaststudy.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _config(tmp_path, change):
+    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
+    cfg["measured"]["tests_dir"] = str(ROOT / cfg["measured"]["tests_dir"])
+    change(cfg["calibration"])
+    path = tmp_path / "config.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    return path
+
+
+@pytest.mark.parametrize("change, key, allowed", [
+    (lambda c: c["parameters"].update(E_star={"min": 1, "max": 2}), "calibration.parameters.E_star",
+     "unknown key"),
+    (lambda c: c["parameters"]["mu"].update(min=-0.1), "calibration.parameters.mu.min", ">= 0"),
+    (lambda c: c["parameters"]["F_str_co"].update(min=0.0), "calibration.parameters.F_str_co.min", "> 0"),
+    (lambda c: c["parameters"]["F_str_co"].update(min=6.0, max=2.0), "calibration.parameters.F_str_co.min",
+     "must be below calibration.parameters.F_str_co.max"),
+    (lambda c: c["parameters"]["mu"].pop("max"), "calibration.parameters.mu.max", "missing"),
+    (lambda c: c.update(cases=1), "calibration.cases", ">= 2"),
+    (lambda c: c.update(target="nobody/nothing"), "calibration.target", "allowed: sun_et_al_16/p30_q230_f10"),
+])
+def test_bad_calibration_config_is_one_line(tmp_path, capsys, change, key, allowed):
+    config = _config(tmp_path, change)
+    assert main(["config", "check", "--config", str(config)]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and f"{config}: {key}" in line and allowed in line, line
+
+
+def test_snakefile_refuses_a_target_that_is_no_test(tmp_path):
+    for part in ("Snakefile", "workflow", "config"):
+        src = ROOT / part
+        (shutil.copytree(src, tmp_path / part, symlinks=False) if src.is_dir() else shutil.copy(src, tmp_path))
+    cfg_path = tmp_path / "config" / "config.yaml"
+    cfg = yaml.safe_load(cfg_path.read_text())
+    cfg["calibration"]["target"] = "nobody/nothing"
+    cfg_path.write_text(yaml.safe_dump(cfg))
+    out = subprocess.run(["snakemake", "--cores", "1", "-n", "calibrate"], cwd=tmp_path,
+                         capture_output=True, text=True)
+    lines = [ln for ln in out.stderr.strip().splitlines() if not ln.startswith("note: ")]
+    assert out.returncode == 2 and len(lines) == 1, out.stderr
+    assert "config.yaml: calibration.target: 'nobody/nothing' is not a measured test" in lines[0]
+
+
+def test_calibrate_checks_before_any_case(tmp_path, capsys):
+    """K specimens must match calibration.cases; the measured points must reach into the
+    simulated cycles; nothing is written then."""
+    from ballaststudy.measured.importer import measured_dataset, write_test
+    test = ROOT / "config" / "measured" / "sun_et_al_16" / "p60_q230_f5.yaml"
+    data_dir = ROOT / "../shared/data/measured"
+    if not data_dir.is_dir():
+        pytest.skip("the shared measured data are not here")
+    measured = tmp_path / "m.nc"
+    write_test(measured_dataset(test, data_dir), measured)
+    out = tmp_path / "cal"
+    for change, argv_specimens, key in (
+            (lambda c: c.update(cases=2), ["a.nc"], "calibration.cases: 2 but 1 specimens given"),
+            (lambda c: c.update(cases=2, cycles=1), ["a.nc", "b.nc"], "calibration.cycles: 1 cycles hold 1 measured point")):
+        config = _config(tmp_path, change)
+        args = ["calibrate", str(measured), "--conditions", str(test), "--specimens",
+                *[str(tmp_path / s) for s in argv_specimens], "--out-dir", str(out), "--config", str(config)]
+        assert main(args) == 2
+        line = capsys.readouterr().err.strip()
+        assert "\n" not in line and key in line, line
+    assert not any(out.rglob("*"))
+
+
+def test_study_follows_the_calibration_when_asked(tmp_path):
+    """study.parameters: calibrated -> every box case run depends on the calibrate target's
+    calibrated.yaml (so the study reruns when the calibration changes)."""
+    for part in ("Snakefile", "workflow", "config"):
+        src = ROOT / part
+        (shutil.copytree(src, tmp_path / part, symlinks=False) if src.is_dir() else shutil.copy(src, tmp_path))
+    cfg_path = tmp_path / "config" / "config.yaml"
+    cfg = yaml.safe_load(cfg_path.read_text())
+    cfg["measured"]["data_dir"] = str(ROOT / cfg["measured"]["data_dir"])
+    cfg["databases"] = ["box_test"]
+    cfg["study"].update(parameters="calibrated", cases_per_database=1)
+    cfg_path.write_text(yaml.safe_dump(cfg))
+    out = subprocess.run(["snakemake", "--cores", "1", "-n", "-p", "study_aggregate"], cwd=tmp_path,
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "rule calibrate:" in out.stdout and "rule calibration_assemble:" in out.stdout
+    target = cfg["calibration"]["target"]
+    assert f"--parameters results/calibration/{target}/calibrated.yaml" in out.stdout
+
+
+def test_case_run_takes_calibrated_parameters(small_library, tmp_path, capsys):
+    """`case run --parameters calibrated.yaml`: applied (metrics.nc says so, the record lists
+    the file); an unknown name or a value out of range is one line, exit 2."""
+    import json
+
+    import xarray as xr
+    asm = tmp_path / "assembled.nc"
+    assert main(["case", "assemble", str(small_library), "--case", "0", "--rig", "biaxial",
+                 "--width-m", "0.12", "--height-m", "0.24", "--out", str(asm), "--quiet"]) == 0
+    good = tmp_path / "calibrated.yaml"
+    good.write_text(yaml.safe_dump({"parameters": {"F_str_co": 7.0, "mu": 0.5}}))
+    config = _config(tmp_path, lambda c: None)
+    cfg = yaml.safe_load(config.read_text())
+    cfg["rig"]["biaxial"]["loading"].update(consolidation_window_steps=1000, deviator_max_kPa=60.0)
+    config.write_text(yaml.safe_dump(cfg))
+    out = tmp_path / "m" / "metrics.nc"
+    assert main(["case", "run", str(asm), "--cycles", "1", "--parameters", str(good), "--config",
+                 str(config), "--out", str(out), "--no-vtk", "--no-figures", "--quiet"]) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["material_parameters"].startswith(f"calibrated ({good})")
+    record = json.loads(out.with_name("metrics.nc.prov.json").read_text())
+    assert str(good) in json.dumps(record["inputs"]) and record["params"]["material_parameters"] == {"F_str_co": 7.0, "mu": 0.5}
+    for bad, key in (({"E_star": 1.0}, "parameters.E_star: unknown parameter"),
+                     ({"F_str_co": 0.0}, "parameters.F_str_co: 0.0 is not allowed; allowed: a number > 0"),
+                     ({"mu": -1}, "parameters.mu: -1 is not allowed")):
+        path = tmp_path / "bad.yaml"
+        path.write_text(yaml.safe_dump({"parameters": bad}))
+        capsys.readouterr()
+        assert main(["case", "run", str(asm), "--cycles", "1", "--parameters", str(path), "--config",
+                     str(config), "--out", str(tmp_path / "x" / "metrics.nc"), "--quiet"]) == 2
+        line = capsys.readouterr().err.strip()
+        assert "\n" not in line and f"{path}: {key}" in line, line
+
+
+def test_parameter_ranges_are_the_schemas():
+    """One physical range per parameter: the config schema's prior bounds say the same."""
+    from ballaststudy.calibration.parameters import PARAMETERS
+    from ballaststudy.schema import load_schema
+    props = load_schema("config")["properties"]["calibration"]["properties"]["parameters"]["properties"]
+    assert set(props) == set(PARAMETERS)
+    for name, p in PARAMETERS.items():
+        for bound in ("min", "max"):
+            b = props[name]["properties"][bound]
+            low = b.get("exclusiveMinimum", b.get("minimum"))
+            assert (low, "exclusiveMinimum" in b, b["maximum"]) == (p.lowest, p.open_low, p.highest), name

@@ -1,0 +1,70 @@
+"""The parametric study's statistics on planted cases where the answer is known: a planted
+slope recovered within its 95 % interval, the thesis' finding marked holds / does not hold
+/ not decidable as the planted relation says (a negative control without any relation), the
+SRC of a noiseless line is +-1, far below the thesis' scale the mark says so."""
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from ballaststudy.calibration.parametric import findings, parametric_dataset, slope_table
+from ballaststudy.cli import main
+
+
+def _plant(tmp_path, name, values, settle, cases=5, cycles=100, seed=0):
+    """metrics.nc per (value, case): settlement rising linearly over the cycles to
+    settle(value) + noise at the last cycle."""
+    rng = np.random.default_rng(seed)
+    paths = []
+    for v in values:
+        for k in range(cases):
+            final = settle(v) + rng.normal(0, 1e-4)
+            ds = xr.Dataset({"settlement": ("cycle", np.linspace(0, final, cycles)),
+                             "breakage_rate": ("cycle", np.full(cycles, 0.01))},
+                            coords={"cycle": np.arange(cycles)},
+                            attrs={"seed": k, "material_parameters": f"calibrated (s.yaml): {json.dumps({name: v})}"})
+            paths.append(tmp_path / f"{name}_{v:g}_{k}.nc")
+            ds.to_netcdf(paths[-1])
+    return paths
+
+
+def _row(table, name, output="settlement"):
+    return next(r for r in table if r["parameter"] == name and r["output"] == output)
+
+
+def test_planted_slopes_and_findings(tmp_path):
+    paths = (_plant(tmp_path, "F_str_co", [2.0, 2.75, 3.5, 4.25, 5.0], lambda f: 0.010 - 0.001 * f)
+             + _plant(tmp_path, "mu", [0.5, 0.6, 0.7, 0.8], lambda m: 0.004, seed=1))
+    ds = parametric_dataset(paths)
+    table = slope_table(ds)
+    f = _row(table, "F_str_co")
+    assert f["ci_low"] <= -0.001 <= f["ci_high"] and f["ci_high"] < 0 and f["p_value"] < 1e-6
+    assert f["src"] == pytest.approx(-1.0, abs=0.02)          # nearly noiseless line
+    mu = _row(table, "mu")
+    assert mu["ci_low"] < 0 < mu["ci_high"] and abs(mu["src"]) < 0.6        # nothing planted
+    marks = {m["finding"].split(" (")[0]: m["mark"] for m in findings(table, cases=5, cycles=100)}
+    assert marks == {"settlement rises as F_str-co falls": "holds",
+                     "settlement rises as mu falls": "not decidable"}
+    small = findings(table, cases=2, cycles=3)
+    assert [m["mark"] for m in small] == ["not decidable at this scale", "not decidable"]
+    assert small[0]["mark_by_rule"] == "holds"
+
+
+def test_the_opposite_relation_does_not_hold(tmp_path):
+    ds = parametric_dataset(_plant(tmp_path, "mu", [0.5, 0.6, 0.7, 0.8], lambda m: 0.001 + 0.01 * m))
+    marks = findings(slope_table(ds), cases=5, cycles=100)
+    assert [m["mark"] for m in marks] == ["does not hold"]
+
+
+def test_report_cli_writes_every_file(tmp_path):
+    paths = (_plant(tmp_path, "F_str_co", [2.0, 3.5, 5.0], lambda f: 0.01 - 0.001 * f, cases=2, cycles=3)
+             + _plant(tmp_path, "mu", [0.5, 0.7], lambda m: 0.004, cases=2, cycles=3))
+    out = tmp_path / "out"
+    assert main(["parametric", "report", *map(str, paths), "--out-dir", str(out), "--quiet"]) == 0
+    for name in ("parametric.nc", "report.md", "F_str_co.png", "mu.png", "report.md.prov.json"):
+        assert (out / name).is_file(), name
+    text = (out / "report.md").read_text()
+    assert "not decidable at this scale" in text and "| F_str_co | settlement |" in text
+    with xr.open_dataset(out / "parametric.nc") as ds:
+        assert ds.sizes["run"] == 10 and ds["settlement"].attrs["units"] == "m"

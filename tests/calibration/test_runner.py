@@ -1,0 +1,83 @@
+"""The calibration's model side: parameters applied to an assembled specimen exactly as
+named (bond strengths scaled by F_str_co / 3.5, the stone-stone friction set, walls kept),
+a failed case's curve censored at the failure strain, curves compared in ln N at the
+measured points, the cache key."""
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from ballaststudy.calibration.parameters import PARAMETERS, apply_parameters
+from ballaststudy.calibration.runner import at_points, case_curve, set_key
+from ballaststudy.rig.biaxial import MEMBRANE, PLATEN, BiaxialParams, BiaxialRig, assemble_biaxial
+from ballaststudy.rig.library import load_library
+
+
+@pytest.fixture(scope="module")
+def specimen(small_library, tmp_path_factory):
+    p = BiaxialParams(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000,
+                      fill_area_ratio=0.9)
+    path = tmp_path_factory.mktemp("cal") / "assembled.nc"
+    assemble_biaxial(load_library(small_library), p, seed=7).save(path)
+    return path
+
+
+def test_parameters_applied_as_named(specimen):
+    rig = BiaxialRig.load(specimen)
+    sim = rig.sim
+    sigc, coh = sim.bonds.sigc.copy(), sim.bonds.coh.copy()
+    mu0 = sim.contact_coefficient("mu")
+    assert PARAMETERS["F_str_co"].table_4_2(rig) == 3.5 and PARAMETERS["mu"].table_4_2(rig) == mu0[0, 0]
+    apply_parameters(rig, {"F_str_co": 7.0, "mu": 0.4})
+    np.testing.assert_allclose(sim.bonds.sigc, 2.0 * sigc, rtol=1e-15)
+    np.testing.assert_allclose(sim.bonds.coh, 2.0 * coh, rtol=1e-15)
+    mu = sim.contact_coefficient("mu")
+    assert np.all(mu[:2, :2] == 0.4)
+    for wall in (PLATEN, MEMBRANE):               # the rig's wall frictions kept
+        assert np.all(mu[:2, wall] == mu0[:2, wall]) and np.all(mu[wall, :2] == mu0[wall, :2])
+
+
+def _metrics(path, rows, failed, failure_strain=0.15):
+    ds = xr.Dataset({"axial_strain": ("cycle", np.asarray(rows, float))},
+                    coords={"cycle": np.arange(len(rows))},
+                    attrs={"failed": int(failed), "rig_params_json": json.dumps({"failure_axial_strain": failure_strain})})
+    ds.to_netcdf(path)
+    return path
+
+
+def test_failed_case_censored_at_the_failure_strain(tmp_path):
+    curve, failed = case_curve(_metrics(tmp_path / "a.nc", [0.01, 0.02], True), "axial_strain", 5)
+    assert failed and curve.tolist() == [0.01, 0.02, 0.15, 0.15, 0.15]
+    curve, _ = case_curve(_metrics(tmp_path / "b.nc", [], True), "axial_strain", 3)
+    assert curve.tolist() == [0.15] * 3                      # failed in its first loading
+    curve, _ = case_curve(_metrics(tmp_path / "c.nc", [0.2], True), "axial_strain", 2)
+    assert curve.tolist() == [0.2, 0.2]                      # past the failure strain: its last
+    curve, failed = case_curve(_metrics(tmp_path / "d.nc", [0.01, 0.02, 0.03], False), "axial_strain", 3)
+    assert not failed and curve.tolist() == [0.01, 0.02, 0.03]
+    with pytest.raises(ValueError, match="not failed"):
+        case_curve(_metrics(tmp_path / "e.nc", [0.01], False), "axial_strain", 3)
+
+
+def test_curve_at_measured_points_in_ln_n():
+    n = np.arange(1, 11, dtype=float)
+    curve = 0.01 + 0.003 * np.log(n)               # linear in ln N: exact at any N in between
+    pts = np.array([1.0, 2.5, 4.96, 10.0])
+    np.testing.assert_allclose(at_points(curve, pts), 0.01 + 0.003 * np.log(pts), rtol=1e-12)
+
+
+def test_set_key_changes_with_what_decides_the_cases():
+    ctx = {"cycles": 5, "rig": {"confining_pressure_kPa": 60.0}, "specimens": ["case0.nc"]}
+    key = set_key({"mu": 0.7, "F_str_co": 3.5}, ctx)
+    assert key == set_key({"F_str_co": 3.5, "mu": 0.7 + 1e-15}, ctx)      # order, round-off
+    assert key != set_key({"F_str_co": 3.5, "mu": 0.71}, ctx)
+    assert key != set_key({"F_str_co": 3.5, "mu": 0.7}, {**ctx, "cycles": 6})
+
+
+def test_config_error_crosses_process_boundaries():
+    """A worker's bad-input error reaches the parent as the same one line."""
+    import pickle
+
+    from ballaststudy.config import ConfigError
+    err = pickle.loads(pickle.dumps(ConfigError("a.yaml", "k", "bad")))
+    assert isinstance(err, ConfigError) and str(err) == "a.yaml: k: bad" and err.key == "k"

@@ -1,0 +1,57 @@
+# Calibration (thesis 4.3): the config's parameters fitted to one measured test with the
+# biaxial rig -> results/calibration/<target>/ (calibrated.yaml, evaluations.nc, posterior.nc,
+# figures, summary.md). `snakemake --cores 2 calibrate`; not part of `all`. The cases of
+# every parameter set are cached under cases/<hash>/: an interrupted run resumes.
+from ballaststudy.calibration.cli import check_target
+
+CALIBRATION = config["calibration"]
+CAL_TARGET = CALIBRATION["target"]
+CAL_OUT = f"{RESULTS}/calibration/{CAL_TARGET}"
+try:                                      # before any job: one line, file and key
+    check_target(config, CONFIG_FILE, MEASURED_TESTS)
+except ConfigError as err:
+    stop(err)
+
+
+rule calibration_assemble:
+    input:
+        bpm=f"{RESULTS}/bpm/{CALIBRATION['database']}.nc",
+    output:
+        f"{RESULTS}/calibration/specimens/{CALIBRATION['database']}/case{{case}}.nc",
+    params:
+        assembly=json.dumps((config["rig"].get("biaxial") or {}).get("assembly") or {}, sort_keys=True),
+        size=" ".join(f"--{k.replace('_', '-')} {CALIBRATION[k]}" for k in ("width_m", "height_m")
+                      if CALIBRATION.get(k) is not None),
+        config=CONFIG_FILE,
+    log:
+        f"{RESULTS}/logs/calibration/specimen{{case}}.log",
+    shell:
+        "ballaststudy case assemble {input.bpm} --case {wildcards.case} --rig biaxial "
+        "{params.size} --config {params.config} --out {output} --quiet > {log} 2>&1"
+
+
+rule calibrate:
+    input:
+        measured=f"{RESULTS}/measured/{CAL_TARGET}.nc",
+        conditions=MEASURED_TESTS_DIR / f"{CAL_TARGET}.yaml",
+        specimens=expand(f"{RESULTS}/calibration/specimens/{CALIBRATION['database']}/case{{case}}.nc",
+                         case=range(CALIBRATION["cases"])),
+    output:
+        yaml=f"{CAL_OUT}/calibrated.yaml",
+        nc=f"{CAL_OUT}/evaluations.nc",
+        posterior=f"{CAL_OUT}/posterior.nc",
+        summary=report(f"{CAL_OUT}/summary.md", caption="../report/calibration.rst", category="Calibration"),
+        figures=report([f"{CAL_OUT}/curves.png", f"{CAL_OUT}/corner.png"],
+                       caption="../report/calibration.rst", category="Calibration"),
+    params:
+        calibration=json.dumps(CALIBRATION, sort_keys=True),
+        rig=json.dumps((config["rig"].get("biaxial") or {}).get("loading") or {}, sort_keys=True),
+        out_dir=CAL_OUT,
+        config=CONFIG_FILE,
+    threads: workflow.cores
+    log:
+        f"{RESULTS}/logs/calibration/calibrate.log",
+    shell:
+        "ballaststudy calibrate {input.measured} --conditions {input.conditions} "
+        "--specimens {input.specimens} --out-dir {params.out_dir} --jobs {threads} "
+        "--config {params.config} --quiet > {log} 2>&1"
