@@ -3,6 +3,7 @@ named (bond strengths scaled by F_str_co / 3.5, the stone-stone friction set, wa
 a failed case's curve censored at the failure strain, curves compared in ln N at the
 measured points, the cache key."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -81,3 +82,35 @@ def test_config_error_crosses_process_boundaries():
     from ballaststudy.config import ConfigError
     err = pickle.loads(pickle.dumps(ConfigError("a.yaml", "k", "bad")))
     assert isinstance(err, ConfigError) and str(err) == "a.yaml: k: bad" and err.key == "k"
+
+
+def test_an_interrupted_calibration_reuses_finished_cases(specimen, tmp_path):
+    """A set evaluated again (a rerun after an interruption) reads its finished cases and
+    runs nothing: same curves, files untouched."""
+    import yaml
+
+    from ballaststudy.calibration.runner import Evaluator
+    root = Path(__file__).resolve().parents[2]
+    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
+    cfg["databases_file"] = str(root / cfg["databases_file"])
+    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    conditions = tmp_path / "t.yaml"
+    conditions.write_text(yaml.safe_dump(dict(
+        source="planted", rig="triaxial", confining_pressure_kPa=30.0, deviator_min_kPa=10.0,
+        deviator_max_kPa=60.0, curves=[dict(file="a.dat", quantity="axial_strain", units="1",
+                                            sign="compression_positive")])))
+    theta = np.array([[3.0, 0.6]])
+
+    def evaluator():
+        return Evaluator(["F_str_co", "mu"], [specimen], conditions, config, 2, "axial_strain",
+                         np.array([1.0, 2.0]), tmp_path / "cal")
+    first = evaluator()(theta)
+    files = sorted((tmp_path / "cal" / "cases").rglob("*"))
+    stamps = [f.stat().st_mtime_ns for f in files]
+    again = evaluator()
+    second = again(theta)
+    assert np.array_equal(first[0], second[0]) and len(again.sets) == 1
+    assert sorted((tmp_path / "cal" / "cases").rglob("*")) == files
+    assert [f.stat().st_mtime_ns for f in files] == stamps

@@ -72,6 +72,17 @@ def test_whole_chain_is_planned(study):
                     "study_iri": 1, "study_optimise": 1, "all": 1}, jobs
 
 
+def test_parametric_study_is_planned(study):
+    """`snakemake parametric`: 5 F_str_co and 4 mu values, parametric.cases runs each on the
+    study's assembled cases, one report; not part of `all`."""
+    cfg = yaml.safe_load((study / "config" / "config.yaml").read_text())
+    par = cfg["parametric"]
+    jobs = _jobs(_snakemake(study, "-n", "parametric"))
+    n_values = len(par["F_str_co"]) + len(par["mu"])
+    assert jobs == {"parametric_setting": n_values, "parametric_run": n_values * par["cases"],
+                    "case_assemble": par["cases"], "bpm_build": 1, "parametric": 1}, jobs
+
+
 def _loading(cfg):
     return cfg["rig"]["box"]["loading"]
 
