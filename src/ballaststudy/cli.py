@@ -107,12 +107,12 @@ def _config_check(args):
     cfg = load_config(args.config)
     dbs = load_databases(cfg["databases_file"], form_params(cfg))
     names = select_databases(cfg, dbs, args.config)
-    from .calibration.cli import check_target
+    from .calibration.cli import check_targets
     tests_dir = Path(cfg["measured"]["tests_dir"])
     tests = sorted(tests_dir.rglob("*.yaml"))
     for test in tests:
         load_conditions(test)
-    check_target(cfg, args.config, [str(t.relative_to(tests_dir).with_suffix("")) for t in tests])
+    check_targets(cfg, args.config, [str(t.relative_to(tests_dir).with_suffix("")) for t in tests])
     print(f"{args.config}: ok ({len(names)} databases: {', '.join(names)}; {len(tests)} measured tests)")
 
 

@@ -32,7 +32,10 @@ def _config(tmp_path, change):
      "must be below calibration.parameters.F_str_co.max"),
     (lambda c: c["parameters"]["mu"].pop("max"), "calibration.parameters.mu.max", "missing"),
     (lambda c: c.update(cases=1), "calibration.cases", ">= 2"),
-    (lambda c: c.update(target="nobody/nothing"), "calibration.target", "allowed: sun_et_al_16/p30_q230_f10"),
+    (lambda c: c.update(targets=["nobody/nothing"]), "calibration.targets[0]", "allowed: sun_et_al_16/p30_q230_f10"),
+    (lambda c: c.update(targets=["sun_et_al_16/p60_q230_f5", "sun_et_al_16/p60_q230_f10"]), "calibration.name",
+     "required with more than one target"),
+    (lambda c: c.update(targets=[]), "calibration.targets", "a list of 1 to 100 items"),
 ])
 def test_bad_calibration_config_is_one_line(tmp_path, capsys, change, key, allowed):
     config = _config(tmp_path, change)
@@ -47,13 +50,13 @@ def test_snakefile_refuses_a_target_that_is_no_test(tmp_path):
         (shutil.copytree(src, tmp_path / part, symlinks=False) if src.is_dir() else shutil.copy(src, tmp_path))
     cfg_path = tmp_path / "config" / "config.yaml"
     cfg = yaml.safe_load(cfg_path.read_text())
-    cfg["calibration"]["target"] = "nobody/nothing"
+    cfg["calibration"]["targets"] = ["nobody/nothing"]
     cfg_path.write_text(yaml.safe_dump(cfg))
     out = subprocess.run(["snakemake", "--cores", "1", "-n", "calibrate"], cwd=tmp_path,
                          capture_output=True, text=True)
     lines = [ln for ln in out.stderr.strip().splitlines() if not ln.startswith("note: ")]
     assert out.returncode == 2 and len(lines) == 1, out.stderr
-    assert "config.yaml: calibration.target: 'nobody/nothing' is not a measured test" in lines[0]
+    assert "config.yaml: calibration.targets[0]: 'nobody/nothing' is not a measured test" in lines[0]
 
 
 def test_calibrate_checks_before_any_case(tmp_path, capsys):
@@ -95,7 +98,7 @@ def test_study_follows_the_calibration_when_asked(tmp_path):
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert "rule calibrate:" in out.stdout and "rule calibration_assemble:" in out.stdout
-    target = cfg["calibration"]["target"]
+    target = cfg["calibration"]["targets"][0]
     assert f"--parameters results/calibration/{target}/calibrated.yaml" in out.stdout
 
 

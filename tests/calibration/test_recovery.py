@@ -51,12 +51,12 @@ def test_calibration_recovers_known_parameters(setting):
     specimens, config, conditions, tmp = setting
     points = np.arange(1.0, CYCLES + 1)
     names = list(TRUE)
-    truth = Evaluator(names, specimens[2:], conditions, config, CYCLES, "axial_strain", points,
+    truth = Evaluator(names, specimens[2:], [(conditions, points)], config, CYCLES, "axial_strain",
                       tmp / "truth", jobs=1)
     y = truth(np.array([list(TRUE.values())]))[0][0]
     y = y + np.random.default_rng(5).normal(0.0, 5e-4, y.size)     # digitised points
-    evaluate = Evaluator(names, specimens[:2], conditions, config, CYCLES, "axial_strain",
-                         points, tmp / "cal", jobs=2)
+    evaluate = Evaluator(names, specimens[:2], [(conditions, points)], config, CYCLES, "axial_strain",
+                         tmp / "cal", jobs=2)
     res = calibrate(evaluate, y, LOWER, UPPER, n_initial=6, iterations=2, batch=3, seed=11,
                     include=np.array([3.5, 0.7]), measurement_var=(5e-4) ** 2)
     post = res.posterior

@@ -104,8 +104,8 @@ def test_an_interrupted_calibration_reuses_finished_cases(specimen, tmp_path):
     theta = np.array([[3.0, 0.6]])
 
     def evaluator():
-        return Evaluator(["F_str_co", "mu"], [specimen], conditions, config, 2, "axial_strain",
-                         np.array([1.0, 2.0]), tmp_path / "cal")
+        return Evaluator(["F_str_co", "mu"], [specimen], [(conditions, np.array([1.0, 2.0]))], config, 2,
+                         "axial_strain", tmp_path / "cal")
     first = evaluator()(theta)
     files = sorted((tmp_path / "cal" / "cases").rglob("*"))
     stamps = [f.stat().st_mtime_ns for f in files]
@@ -114,3 +114,36 @@ def test_an_interrupted_calibration_reuses_finished_cases(specimen, tmp_path):
     assert np.array_equal(first[0], second[0]) and len(again.sets) == 1
     assert sorted((tmp_path / "cal" / "cases").rglob("*")) == files
     assert [f.stat().st_mtime_ns for f in files] == stamps
+
+
+
+def test_several_targets_make_one_curve(specimen, tmp_path):
+    """Two target tests (different q): each set runs the specimens under each; the points
+    come one test after the other, each test's from its own cases."""
+    import yaml
+
+    from ballaststudy.calibration.runner import Evaluator
+    root = Path(__file__).resolve().parents[2]
+    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
+    cfg["databases_file"] = str(root / cfg["databases_file"])
+    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    tests = []
+    for q, pts in ((40.0, [1.0, 2.0]), (80.0, [1.5])):
+        c = tmp_path / f"q{q:g}.yaml"
+        c.write_text(yaml.safe_dump(dict(source="planted", rig="triaxial", confining_pressure_kPa=30.0,
+                                         deviator_min_kPa=10.0, deviator_max_kPa=q,
+                                         curves=[dict(file="a.dat", quantity="axial_strain", units="1",
+                                                      sign="compression_positive")])))
+        tests.append((c, np.array(pts)))
+    ev = Evaluator(["mu"], [specimen], tests, config, 2, "axial_strain", tmp_path / "cal")
+    out = ev(np.array([[0.7]]))[0]
+    curves = ev.sets[0]["curves"]
+    assert out.shape == (1, 3) and curves.shape == (1 + 1, 1, 2)
+    np.testing.assert_allclose(out[0, :2], curves[0, 0])            # test 0 at N = 1, 2
+    np.testing.assert_allclose(out[0, 2], at_points(curves[1, 0], np.array([1.5]))[0])
+    assert curves[1, 0, -1] > curves[0, 0, -1]                      # the larger q strains more
+    rigs = [json.loads(xr.open_dataset(f).attrs["rig_params_json"])["deviator_max_kPa"]
+            for f in sorted((tmp_path / "cal" / "cases").rglob("case0.nc"))]
+    assert rigs == [40.0, 80.0]

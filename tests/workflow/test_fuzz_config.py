@@ -119,7 +119,7 @@ def originals(tmp_path_factory):
     dbs["databases"] = {k: dbs["databases"][k] for k in DATABASES}
     cfg.update(databases_file=str(root / "databases.yaml"), databases=list(DATABASES))
     cfg["measured"].update(tests_dir=str(root / "measured"), data_dir=str(root / "data"))
-    cfg["calibration"]["target"] = "t"          # the synthetic test
+    cfg["calibration"]["targets"] = ["t"]          # the synthetic test
     return root, cfg, dbs, copy.deepcopy(MEASURED_TEST)
 
 

@@ -1,14 +1,13 @@
-# Calibration (thesis 4.3): the config's parameters fitted to one measured test with the
-# biaxial rig -> results/calibration/<target>/ (calibrated.yaml, evaluations.nc, posterior.nc,
+# Calibration (thesis 4.3): the config's parameters fitted to one or more measured tests
+# with the biaxial rig -> results/calibration/<target, or calibration.name>/ (calibrated.yaml, evaluations.nc, posterior.nc,
 # figures, summary.md). `snakemake --cores 2 calibrate`; not part of `all`. The cases of
 # every parameter set are cached under cases/<hash>/: an interrupted run resumes.
-from ballaststudy.calibration.cli import check_target
+from ballaststudy.calibration.cli import check_targets
 
 CALIBRATION = config["calibration"]
-CAL_TARGET = CALIBRATION["target"]
-CAL_OUT = f"{RESULTS}/calibration/{CAL_TARGET}"
+CAL_TARGETS = CALIBRATION["targets"]
 try:                                      # before any job: one line, file and key
-    check_target(config, CONFIG_FILE, MEASURED_TESTS)
+    CAL_OUT = f"{RESULTS}/calibration/{check_targets(config, CONFIG_FILE, MEASURED_TESTS)}"
 except ConfigError as err:
     stop(err)
 
@@ -32,8 +31,8 @@ rule calibration_assemble:
 
 rule calibrate:
     input:
-        measured=f"{RESULTS}/measured/{CAL_TARGET}.nc",
-        conditions=MEASURED_TESTS_DIR / f"{CAL_TARGET}.yaml",
+        measured=[f"{RESULTS}/measured/{t}.nc" for t in CAL_TARGETS],
+        conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in CAL_TARGETS],
         specimens=expand(f"{RESULTS}/calibration/specimens/{CALIBRATION['database']}/case{{case}}.nc",
                          case=range(CALIBRATION["cases"])),
     output:
@@ -48,7 +47,7 @@ rule calibrate:
         rig=json.dumps((config["rig"].get("biaxial") or {}).get("loading") or {}, sort_keys=True),
         out_dir=CAL_OUT,
         config=CONFIG_FILE,
-    threads: workflow.cores
+    threads: 256      # Snakemake caps it at --cores (workflow.cores breaks snakemake --report)
     log:
         f"{RESULTS}/logs/calibration/calibrate.log",
     shell:

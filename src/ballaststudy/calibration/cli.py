@@ -1,8 +1,10 @@
 """`ballaststudy calibrate`: the config's parameters (section ``calibration``) fitted to one
-measured test with the biaxial rig (thesis 4.3, automated).
+or more measured triaxial/biaxial tests with the biaxial rig (thesis 4.3, automated); the
+tests' points are one curve for the likelihood.
 
-    ballaststudy calibrate results/measured/<target>.nc --conditions config/measured/<target>.yaml
-        --specimens S0.nc S1.nc ... --out-dir results/calibration/<target> [--jobs 2]
+    ballaststudy calibrate results/measured/<t1>.nc [<t2>.nc ...] --conditions
+        config/measured/<t1>.yaml [...] --specimens S0.nc S1.nc ... --out-dir
+        results/calibration/<name> [--jobs 2]
 
 Every check (bounds, the measured points within the simulated cycles, K = the specimens)
 before any case runs; finished cases are reused (runner.py), so an interrupted calibration
@@ -29,30 +31,39 @@ def write_netcdf(ds, path):
         ds.to_netcdf(tmp)
 
 
-def check_target(cfg, config_file, tests):
-    """calibration.target must be one of the measured tests (names relative to
-    measured.tests_dir, without .yaml) when there are any."""
-    target = cfg["calibration"]["target"]
-    if tests and target not in tests:
-        raise ConfigError(config_file, "calibration.target", f"{target!r} is not a measured test under "
-                          f"{cfg['measured']['tests_dir']}; allowed: {', '.join(tests)}")
+def check_targets(cfg, config_file, tests):
+    """Every calibration.targets entry must be one of the measured tests (names relative to
+    measured.tests_dir, without .yaml) when there are any; a name for the output folder
+    when there is more than one. Returns that folder's name."""
+    cal = cfg["calibration"]
+    for k, target in enumerate(cal["targets"]):
+        if tests and target not in tests:
+            raise ConfigError(config_file, f"calibration.targets[{k}]", f"{target!r} is not a measured "
+                              f"test under {cfg['measured']['tests_dir']}; allowed: {', '.join(tests)}")
+    if len(cal["targets"]) > 1 and not cal.get("name"):
+        raise ConfigError(config_file, "calibration.name", "missing; allowed: a folder name, required "
+                          "with more than one target")
+    return cal.get("name") or cal["targets"][0]
 
 
-def measured_points(args, cal):
-    """(N, values) of the measured curve within the simulated cycles; ConfigError if fewer
-    than two."""
-    ds = open_netcdf(args.measured, "measured")
+def measured_points(path, config, cal):
+    """(N, values) of a measured test's curve within the simulated cycles; ConfigError if
+    fewer than two."""
+    ds = open_netcdf(path, "measured")
     q = cal["quantity"]
     if q not in ds:
-        raise ConfigError(args.measured, q, f"the test has no {q} curve; allowed: "
+        raise ConfigError(path, q, f"the test has no {q} curve; allowed: "
                           f"{', '.join(v for v in ds.data_vars)}")
+    if ds.attrs.get("rig") not in ("triaxial", "biaxial"):
+        raise ConfigError(path, "rig", f"{ds.attrs.get('rig')}: the calibration runs the biaxial rig, "
+                          "for triaxial or biaxial tests (a box-rig runner is not built)")
     n, y = ds["cycle"].values, ds[q].values
     keep = np.isfinite(y) & (n >= 1) & (n <= cal["cycles"])
     if keep.sum() < 2:
         second = np.sort(n[np.isfinite(y) & (n >= 1)])[1:2]
-        raise ConfigError(args.config, "calibration.cycles",
+        raise ConfigError(config, "calibration.cycles",
                           f"{cal['cycles']} cycles hold {int(keep.sum())} measured point(s) of "
-                          f"{args.measured}; allowed: at least the second point's N "
+                          f"{path}; allowed: at least the second point's N "
                           f"({second[0]:.0f})" if second.size else "the test has < 2 points")
     return n[keep], y[keep]
 
@@ -71,8 +82,15 @@ def _calibrate(args):
     if len(args.specimens) != cal["cases"]:
         raise ConfigError(args.config, "calibration.cases", f"{cal['cases']} but "
                           f"{len(args.specimens)} specimens given; allowed: one specimen per case")
-    input_file(args.conditions, "expected the test's conditions YAML")
-    points, y = measured_points(args, cal)
+    if len(args.conditions) != len(args.measured):
+        raise ConfigError(args.config, "calibration.targets", f"{len(args.measured)} measured files "
+                          f"but {len(args.conditions)} conditions YAMLs; allowed: one of each per target")
+    for c in args.conditions:
+        input_file(c, "expected the test's conditions YAML")
+    measured = [measured_points(m, args.config, cal) for m in args.measured]
+    points = np.concatenate([n for n, _ in measured])
+    y = np.concatenate([v for _, v in measured])
+    point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
     names = list(cal["parameters"])
     lower = np.array([cal["parameters"][k]["min"] for k in names], float)
     upper = np.array([cal["parameters"][k]["max"] for k in names], float)
@@ -80,10 +98,12 @@ def _calibrate(args):
     table = {k: PARAMETERS[k].table_4_2(rig) for k in names}
     t_before = np.array([table[k] for k in names])
     inside = bool(np.all((t_before >= lower) & (t_before <= upper)))
-    recorder = Recorder("calibrate", inputs=(args.measured, args.conditions, args.config, *args.specimens),
-                        params={"calibration": cal})
-    evaluate = Evaluator(names, args.specimens, args.conditions, args.config, cal["cycles"],
-                         cal["quantity"], points, out, jobs=args.jobs, progress=not args.quiet)
+    recorder = Recorder("calibrate", inputs=(*args.measured, *args.conditions, args.config, *args.specimens),
+                        params={"calibration": cal}, seed=cfg["seed"])
+    evaluate = Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
+                         args.config, cal["cycles"], cal["quantity"], out, jobs=args.jobs,
+                         progress=not args.quiet)
+    targets = [str(m) for m in args.measured]
     t0 = time.time()
     res = calibrate(evaluate, y, lower, upper, cal["initial_design"], cal["iterations"],
                     cal["batch"], seed=cfg["seed"], include=t_before if inside else None,
@@ -95,11 +115,11 @@ def _calibrate(args):
     evaluate(res.posterior.mean[None])      # the calibrated set, from DEM runs
     rounds.append(-1)
     before = 0 if inside else len(rounds) - 2
-    ds = evaluations_dataset(names, evaluate.sets, rounds, points, y, cal["cycles"], cal["quantity"],
-                             {"target": str(args.measured), "method": METHOD})
+    ds = evaluations_dataset(names, evaluate.sets, rounds, points, point_test, y, cal["cycles"],
+                             cal["quantity"], {"targets": ", ".join(targets), "method": METHOD})
     at = ds[cal["quantity"] + "_at_points"].values
     summary = dict(
-        target=str(args.measured), quantity=cal["quantity"], cycles=cal["cycles"], cases=cal["cases"],
+        targets=targets, quantity=cal["quantity"], cycles=cal["cycles"], cases=cal["cases"],
         points=int(points.size), method=METHOD, table_4_2=table,
         rmse_before=rmse(at[before].mean(axis=0), y), rmse_after=rmse(at[-1].mean(axis=0), y),
         dem_cases=len(evaluate.sets) * cal["cases"], sets=len(evaluate.sets),
@@ -112,18 +132,19 @@ def _calibrate(args):
     files = {k: out / k for k in ("evaluations.nc", "posterior.nc", "calibrated.yaml",
                                   "curves.png", "corner.png", "summary.md")}
     write_netcdf(ds, files["evaluations.nc"])
-    write_netcdf(posterior_dataset(names, res.posterior, {"target": str(args.measured), "method": METHOD}),
+    write_netcdf(posterior_dataset(names, res.posterior, {"targets": ", ".join(targets), "method": METHOD}),
                  files["posterior.nc"])
     calibrated_yaml(files["calibrated.yaml"], names, res.posterior,
                     {k: v for k, v in summary.items() if k != "correlation"})
     plot_curves(files["curves.png"], ds, cal["quantity"], before, len(rounds) - 1,
-                f"{Path(args.measured).stem}: Table 4.2 (RMSE {summary['rmse_before']:.4f}) vs "
-                f"calibrated (RMSE {summary['rmse_after']:.4f})")
+                f"Table 4.2 (RMSE {summary['rmse_before']:.4f}) vs calibrated (RMSE {summary['rmse_after']:.4f})")
     plot_corner(files["corner.png"], names, res.posterior, res.thetas, lower, upper)
-    summary_markdown(files["summary.md"], Path(args.measured).stem, names, res.posterior, summary)
+    summary_markdown(files["summary.md"], ", ".join(Path(m).stem for m in args.measured), names,
+                     res.posterior, summary)
     recorder.finish()
-    cases = [out / "cases" / st["key"] / f"case{k}.nc"       # this run's sets (the folder
-             for st in evaluate.sets for k in range(cal["cases"])]   # may cache older ones)
+    cases = [out / "cases" / st["key"] / f"test{j}" / f"case{k}.nc"   # this run's sets (the
+             for st in evaluate.sets for j in range(len(targets))     # folder may cache older ones)
+             for k in range(cal["cases"])]
     recorder.write_beside(files["calibrated.yaml"],
                           also=[f for k, f in files.items() if k != "calibrated.yaml"] + cases)
     if not args.quiet:
@@ -181,8 +202,9 @@ def register(subparsers):
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_parametric_report)
     c = subparsers.add_parser("calibrate", help="fit the config's parameters to a measured test (thesis 4.3)")
-    c.add_argument("measured", type=Path, help="the test's netCDF (measured import)")
-    c.add_argument("--conditions", required=True, type=Path, help="the test's conditions YAML")
+    c.add_argument("measured", nargs="+", type=Path, help="the target tests' netCDFs (measured import)")
+    c.add_argument("--conditions", required=True, nargs="+", type=Path,
+                   help="their conditions YAMLs, in the same order")
     c.add_argument("--specimens", required=True, nargs="+", type=Path,
                    help="K assembled biaxial specimens (case assemble --rig biaxial)")
     c.add_argument("--out-dir", required=True, type=Path)

@@ -14,26 +14,31 @@ CF = "CF-1.8"
 CONSTRAINED = 0.5       # a 90 % interval wider than this share of the prior: not constrained
 
 
-def evaluations_dataset(names, sets, rounds, points, measured, cycles, quantity, attrs):
-    """sets: the Evaluator's (values, key, curves (K, cycles), failed); rounds: per set
-    (0 the initial design, 1.. the sequential rounds, -1 the calibrated set)."""
+def evaluations_dataset(names, sets, rounds, points, point_test, measured, cycles, quantity, attrs):
+    """sets: the Evaluator's (values, key, curves (T, K, cycles), failed (T, K)); rounds: per
+    set (0 the initial design, 1.. the sequential rounds, -1 the calibrated set); the points
+    are the target tests' measured points one after the other (point_test: which test)."""
     units, long_name, _ = VARIABLES[quantity]
-    curves = np.array([s["curves"] for s in sets])                  # (J, K, cycles)
+    curves = np.array([s["curves"] for s in sets])                  # (J, T, K, cycles)
     n = np.arange(1, cycles + 1, dtype=float)
-    at = np.array([[np.interp(np.log(points), np.log(n), c) for c in s["curves"]] for s in sets])
+    at = np.array([np.concatenate([[np.interp(np.log(points[point_test == t]), np.log(n), c)
+                                    for c in s["curves"][t]] for t in range(curves.shape[1])], axis=1)
+                   for s in sets])                                   # (J, K, P)
     values = np.array([[s["values"][k] for k in names] for s in sets])
     return xr.Dataset({
         "parameter_value": (("set", "parameter"), values, {"units": "1", "long_name": "parameter values of the set"}),
         "round": ("set", np.asarray(rounds, np.int32), {"units": "1", "long_name": "design round (0 initial design, -1 the calibrated set)"}),
         "set_key": ("set", [s["key"] for s in sets], {"long_name": "folder of the set's cases under cases/"}),
-        "failed": (("set", "case"), np.array([s["failed"] for s in sets], np.int8), {"units": "1", "long_name": "the case's specimen failed (its curve censored at the failure strain)"}),
-        quantity: (("set", "case", "cycle"), curves, {"units": units, "long_name": "simulated " + long_name}),
+        "failed": (("set", "test", "case"), np.array([s["failed"] for s in sets], np.int8), {"units": "1", "long_name": "the case's specimen failed (its curve censored at the failure strain)"}),
+        quantity: (("set", "test", "case", "cycle"), curves, {"units": units, "long_name": "simulated " + long_name}),
         quantity + "_at_points": (("set", "case", "point"), at, {"units": units, "long_name": f"simulated {long_name} at the measured cycles (interpolated in ln N)"}),
         "measured_" + quantity: ("point", measured, {"units": units, "long_name": "measured " + long_name}),
         "measured_cycle": ("point", points, {"units": "1", "long_name": "load cycle N of the measured point"}),
+        "point_test": ("point", np.asarray(point_test, np.int32), {"units": "1", "long_name": "target test of the point"}),
     }, coords={"parameter": ("parameter", list(names)),
                "cycle": ("cycle", n, {"units": "1", "long_name": "load cycle number N (cycle 0 of the rig = N 1)"}),
-               "case": ("case", np.arange(curves.shape[1]), {"units": "1", "long_name": "specimen"})},
+               "test": ("test", np.arange(curves.shape[1]), {"units": "1", "long_name": "target test (attribute targets)"}),
+               "case": ("case", np.arange(curves.shape[2]), {"units": "1", "long_name": "specimen"})},
         attrs={"Conventions": CF, "title": "calibration: every evaluated parameter set", **attrs})
 
 
@@ -61,27 +66,33 @@ def calibrated_yaml(path, names, post, summary):
 
 
 def plot_curves(path, ds, quantity, before, after, title):
-    """Measured points; each case (thin) and the ensemble mean with +-1 sd band of the
-    set before (Table 4.2) and of the calibrated set."""
+    """Per target test: measured points; each case (thin) and the ensemble mean with +-1 sd
+    band of the set before (Table 4.2) and of the calibrated set."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6.5, 4), dpi=110)
+    tests = ds.sizes["test"]
+    fig, axes = plt.subplots(1, tests, figsize=(6.5 * tests, 4), dpi=110, squeeze=False)
     n = ds["cycle"].values
-    for j, label, colour in ((before, "Table 4.2", "0.5"), (after, "calibrated", "C0")):
-        c = 100 * ds[quantity].values[j]
-        for case in c:
-            ax.plot(n, case, color=colour, lw=0.6, alpha=0.6)
-        m, s = c.mean(axis=0), c.std(axis=0, ddof=1)
-        ax.plot(n, m, color=colour, lw=2, label=f"{label}: ensemble mean of {c.shape[0]}")
-        ax.fill_between(n, m - s, m + s, color=colour, alpha=0.2)
-    ax.plot(ds["measured_cycle"], 100 * ds["measured_" + quantity], "ko", ms=4, label="measured")
-    ax.set_xscale("log")
-    ax.set_xlabel("load cycles N")
-    ax.set_ylabel(quantity.replace("_", " ") + " [%]")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    ax.set_title(title, fontsize=8)
+    names = ds.attrs["targets"].split(", ")
+    for t, ax in enumerate(axes[0]):
+        for j, label, colour in ((before, "Table 4.2", "0.5"), (after, "calibrated", "C0")):
+            c = 100 * ds[quantity].values[j, t]
+            for case in c:
+                ax.plot(n, case, color=colour, lw=0.6, alpha=0.6)
+            m, s = c.mean(axis=0), c.std(axis=0, ddof=1)
+            ax.plot(n, m, color=colour, lw=2, label=f"{label}: ensemble mean of {c.shape[0]}")
+            ax.fill_between(n, m - s, m + s, color=colour, alpha=0.2)
+        mine = ds["point_test"].values == t
+        ax.plot(ds["measured_cycle"].values[mine], 100 * ds["measured_" + quantity].values[mine], "ko",
+                ms=4, label="measured")
+        ax.set_xscale("log")
+        ax.set_xlabel("load cycles N")
+        ax.set_ylabel(quantity.replace("_", " ") + " [%]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        ax.set_title(names[t].split("/")[-1], fontsize=8)
+    fig.suptitle(title, fontsize=8)
     _save(fig, path)
 
 

@@ -80,37 +80,40 @@ def at_points(curve, points):
 
 
 class Evaluator:
-    """``evaluate(thetas) -> [(K, P) curves at the measured points]`` for calibrate(); keeps
-    every set's folder, its full curves and its failures (``self.sets``)."""
+    """``evaluate(thetas) -> [(K, P) curves at the measured points]`` for calibrate(): every
+    set runs the K specimens under each target test's conditions; the P points are the tests'
+    measured points one after the other. Keeps every set's folder, its full curves
+    (T, K, cycles) and failures (``self.sets``)."""
 
-    def __init__(self, names, specimens, conditions, config, cycles, quantity, points,
-                 out_dir, jobs=1, progress=False):
-        self.names, self.specimens = list(names), [str(s) for s in specimens]
-        self.conditions = str(conditions)
-        self.cycles, self.quantity, self.points = int(cycles), quantity, np.asarray(points)
-        self.out_dir, self.jobs, self.progress = Path(out_dir), int(jobs), progress
+    def __init__(self, names, specimens, tests, config, cycles, quantity, out_dir, jobs=1,
+                 progress=False):
+        """tests: [(conditions YAML, measured N within the cycles)], one per target."""
         from ..config import load_config
         from ..measured.importer import load_conditions
         from ..rig.biaxial import BiaxialParams
-        params = BiaxialParams.from_config(load_config(config).get("rig", {}))
-        params.take_conditions(load_conditions(conditions))
-        self.rig = params.to_dict()       # read once: a config edited meanwhile changes nothing
-        self.context = {"cycles": self.cycles, "rig": self.rig,
+        self.names, self.specimens = list(names), [str(s) for s in specimens]
+        self.cycles, self.quantity = int(cycles), quantity
+        self.out_dir, self.jobs, self.progress = Path(out_dir), int(jobs), progress
+        self.tests = []
+        for conditions, points in tests:
+            params = BiaxialParams.from_config(load_config(config).get("rig", {}))
+            params.take_conditions(load_conditions(conditions))
+            # read once: a config edited meanwhile changes nothing
+            self.tests.append(dict(conditions=str(conditions), points=np.asarray(points, float),
+                                   rig=params.to_dict()))
+        self.context = {"cycles": self.cycles, "rig": [t["rig"] for t in self.tests],
                         "specimens": [Path(s).name for s in self.specimens]}
-        self.sets = []        # per evaluated set: dict(values, key, curves (K, cycles), failed)
+        self.sets = []
 
     def jobs_for(self, values):
         key = set_key(values, self.context)
-        return key, [dict(specimen=s, values=values, cycles=self.cycles, rig=self.rig,
-                          conditions=self.conditions,
-                          out=str(self.out_dir / "cases" / key / f"case{k}.nc"))
-                     for k, s in enumerate(self.specimens)]
+        return key, [[dict(specimen=s, values=values, cycles=self.cycles, rig=t["rig"],
+                           conditions=t["conditions"],
+                           out=str(self.out_dir / "cases" / key / f"test{j}" / f"case{k}.nc"))
+                      for k, s in enumerate(self.specimens)] for j, t in enumerate(self.tests)]
 
-    def __call__(self, thetas):
-        batch = [dict(zip(self.names, map(float, t))) for t in np.atleast_2d(thetas)]
-        keyed = [self.jobs_for(v) for v in batch]
-        jobs = [j for _, js in keyed for j in js]
-        bar = tqdm(total=len(jobs), desc=f"{len(batch)} parameter set(s)", unit="case",
+    def _run(self, jobs, n_sets):
+        bar = tqdm(total=len(jobs), desc=f"{n_sets} parameter set(s)", unit="case",
                    disable=not self.progress)
         if self.jobs > 1 and len(jobs) > 1:
             with ProcessPoolExecutor(self.jobs) as pool:
@@ -122,10 +125,17 @@ class Evaluator:
                 run_case(j)
                 bar.update()
         bar.close()
+
+    def __call__(self, thetas):
+        batch = [dict(zip(self.names, map(float, t))) for t in np.atleast_2d(thetas)]
+        keyed = [self.jobs_for(v) for v in batch]
+        self._run([j for _, per_test in keyed for js in per_test for j in js], len(batch))
         out = []
-        for values, (key, js) in zip(batch, keyed):
-            curves, failed = zip(*(case_curve(j["out"], self.quantity, self.cycles) for j in js))
-            curves = np.array(curves)
-            self.sets.append(dict(values=values, key=key, curves=curves, failed=list(failed)))
-            out.append(np.array([at_points(c, self.points) for c in curves]))
+        for values, (key, per_test) in zip(batch, keyed):
+            read = [[case_curve(j["out"], self.quantity, self.cycles) for j in js] for js in per_test]
+            curves = np.array([[c for c, _ in r] for r in read])              # (T, K, cycles)
+            self.sets.append(dict(values=values, key=key, curves=curves,
+                                  failed=[[f for _, f in r] for r in read]))
+            out.append(np.concatenate([[at_points(c, t["points"]) for c in curves[j]]
+                                       for j, t in enumerate(self.tests)], axis=1))
         return out
