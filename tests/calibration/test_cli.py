@@ -91,6 +91,8 @@ def test_study_follows_the_calibration_when_asked(tmp_path):
     cfg_path = tmp_path / "config" / "config.yaml"
     cfg = yaml.safe_load(cfg_path.read_text())
     cfg["measured"]["data_dir"] = str(ROOT / cfg["measured"]["data_dir"])
+    if not Path(cfg["measured"]["data_dir"]).is_dir():
+        pytest.skip("the shared measured data are not here (calibrate's input is imported from them)")
     cfg["databases"] = ["box_test"]
     cfg["study"].update(parameters="calibrated", cases_per_database=1)
     cfg_path.write_text(yaml.safe_dump(cfg))
