@@ -7,11 +7,9 @@ Measured 2026-11-24: 24 DEM cases, mu 90 % [0.72, 1.17] (56 % of the prior; true
 F_str_co [1.39, 5.77] (88 %; true 2.0): at this scale the specimen-to-specimen scatter
 (axial strain 0.006 vs 0.034 at the same parameters) leaves F_str_co, which acts only
 through the few bonds that break, nearly unidentified - an honest limit, not a bug."""
-from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from ballaststudy.calibration.bayes import calibrate, rmse
 from ballaststudy.calibration.runner import Evaluator
@@ -25,24 +23,15 @@ ASSEMBLY = dict(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=
 
 
 @pytest.fixture(scope="module")
-def setting(small_library, tmp_path_factory):
+def setting(small_library, tmp_path_factory, fast_config, planted_conditions):
     tmp = tmp_path_factory.mktemp("recovery")
     specimens = []
     for seed in (7, 8, 9):
         path = tmp / f"specimen{seed}.nc"
         assemble_biaxial(load_library(small_library), BiaxialParams(**ASSEMBLY), seed=seed).save(path)
         specimens.append(path)
-    root = Path(__file__).resolve().parents[2]
-    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(root / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    config = tmp / "config.yaml"
-    config.write_text(yaml.safe_dump(cfg))
-    conditions = tmp / "test.yaml"
-    conditions.write_text(yaml.safe_dump(dict(
-        source="planted", rig="triaxial", confining_pressure_kPa=30.0, deviator_min_kPa=10.0,
-        deviator_max_kPa=200.0, frequency_Hz=5.0,
-        curves=[dict(file="a.dat", quantity="axial_strain", units="1", sign="compression_positive")])))
+    config = fast_config(tmp)
+    conditions = planted_conditions(tmp / "test.yaml", 200.0, frequency_Hz=5.0)
     return specimens, config, conditions, tmp
 
 

@@ -3,7 +3,6 @@ named (bond strengths scaled by F_str_co / 3.5, the stone-stone friction set, wa
 a failed case's curve censored at the failure strain, curves compared in ln N at the
 measured points, the cache key."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -84,23 +83,12 @@ def test_config_error_crosses_process_boundaries():
     assert isinstance(err, ConfigError) and str(err) == "a.yaml: k: bad" and err.key == "k"
 
 
-def test_an_interrupted_calibration_reuses_finished_cases(specimen, tmp_path):
+def test_an_interrupted_calibration_reuses_finished_cases(specimen, tmp_path, fast_config, planted_conditions):
     """A set evaluated again (a rerun after an interruption) reads its finished cases and
     runs nothing: same curves, files untouched."""
-    import yaml
-
     from ballaststudy.calibration.runner import Evaluator
-    root = Path(__file__).resolve().parents[2]
-    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(root / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    config = tmp_path / "config.yaml"
-    config.write_text(yaml.safe_dump(cfg))
-    conditions = tmp_path / "t.yaml"
-    conditions.write_text(yaml.safe_dump(dict(
-        source="planted", rig="triaxial", confining_pressure_kPa=30.0, deviator_min_kPa=10.0,
-        deviator_max_kPa=60.0, curves=[dict(file="a.dat", quantity="axial_strain", units="1",
-                                            sign="compression_positive")])))
+    config = fast_config(tmp_path)
+    conditions = planted_conditions(tmp_path / "t.yaml", 60.0)
     theta = np.array([[3.0, 0.6]])
 
     def evaluator():
@@ -117,25 +105,14 @@ def test_an_interrupted_calibration_reuses_finished_cases(specimen, tmp_path):
 
 
 
-def test_several_targets_make_one_curve(specimen, tmp_path):
+def test_several_targets_make_one_curve(specimen, tmp_path, fast_config, planted_conditions):
     """Two target tests (different q): each set runs the specimens under each; the points
     come one test after the other, each test's from its own cases."""
-    import yaml
-
     from ballaststudy.calibration.runner import Evaluator
-    root = Path(__file__).resolve().parents[2]
-    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(root / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    config = tmp_path / "config.yaml"
-    config.write_text(yaml.safe_dump(cfg))
+    config = fast_config(tmp_path)
     tests = []
     for q, pts in ((40.0, [1.0, 2.0]), (80.0, [1.5])):
-        c = tmp_path / f"q{q:g}.yaml"
-        c.write_text(yaml.safe_dump(dict(source="planted", rig="triaxial", confining_pressure_kPa=30.0,
-                                         deviator_min_kPa=10.0, deviator_max_kPa=q,
-                                         curves=[dict(file="a.dat", quantity="axial_strain", units="1",
-                                                      sign="compression_positive")])))
+        c = planted_conditions(tmp_path / f"q{q:g}.yaml", q)
         tests.append((c, np.array(pts)))
     ev = Evaluator(["mu"], [specimen], tests, config, 2, "axial_strain", tmp_path / "cal")
     out = ev(np.array([[0.7]]))[0]
