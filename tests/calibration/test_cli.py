@@ -123,7 +123,8 @@ def test_case_run_takes_calibrated_parameters(small_library, tmp_path, capsys):
     assert main(["case", "run", str(asm), "--cycles", "1", "--parameters", str(good), "--config",
                  str(config), "--out", str(out), "--no-vtk", "--no-figures", "--quiet"]) == 0
     with xr.open_dataset(out) as ds:
-        assert ds.attrs["material_parameters"].startswith(f"calibrated ({good})")
+        assert ds.attrs["material_parameters"] == f"calibrated ({good})"
+        assert json.loads(ds.attrs["material_parameters_json"]) == {"F_str_co": 7.0, "mu": 0.5}
     record = json.loads(out.with_name("metrics.nc.prov.json").read_text())
     assert str(good) in json.dumps(record["inputs"]) and record["params"]["material_parameters"] == {"F_str_co": 7.0, "mu": 0.5}
     for bad, key in (({"E_star": 1.0}, "parameters.E_star: unknown parameter"),

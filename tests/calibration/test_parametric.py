@@ -23,7 +23,7 @@ def _plant(tmp_path, name, values, settle, cases=5, cycles=100, seed=0):
             ds = xr.Dataset({"settlement": ("cycle", np.linspace(0, final, cycles)),
                              "breakage_rate": ("cycle", np.full(cycles, 0.01))},
                             coords={"cycle": np.arange(cycles)},
-                            attrs={"seed": k, "material_parameters": f"calibrated (s.yaml): {json.dumps({name: v})}"})
+                            attrs={"seed": k, "material_parameters_json": json.dumps({name: v})})
             paths.append(tmp_path / f"{name}_{v:g}_{k}.nc")
             ds.to_netcdf(paths[-1])
     return paths

@@ -31,10 +31,10 @@ FINDINGS = {"F_str_co": "settlement rises as F_str-co falls (thesis 4.4, Fig. 4-
 
 def varied(ds, path):
     """(name, value) a case's metrics.nc ran with (its material_parameters attribute)."""
-    text = ds.attrs.get("material_parameters", "")
-    values = json.loads(text[text.index(": ") + 2:]) if text.startswith("calibrated") else {}
+    text = ds.attrs.get("material_parameters_json", "{}")
+    values = json.loads(text)
     if len(values) != 1:
-        raise ConfigError(path, "material_parameters", f"{text or 'none'}: not a parametric run "
+        raise ConfigError(path, "material_parameters_json", f"{text}: not a parametric run "
                           "(one parameter varied: ballaststudy parametric setting)")
     return next(iter(values.items()))
 

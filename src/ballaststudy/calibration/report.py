@@ -15,15 +15,14 @@ CONSTRAINED = 0.5       # a 90 % interval wider than this share of the prior: no
 
 
 def evaluations_dataset(names, sets, rounds, points, point_test, measured, cycles, quantity, attrs):
-    """sets: the Evaluator's (values, key, curves (T, K, cycles), failed (T, K)); rounds: per
+    """sets: the Evaluator's (values, key, curves (T, K, cycles), at_points (K, P), failed
+    (T, K)); rounds: per
     set (0 the initial design, 1.. the sequential rounds, -1 the calibrated set); the points
     are the target tests' measured points one after the other (point_test: which test)."""
     units, long_name, _ = VARIABLES[quantity]
     curves = np.array([s["curves"] for s in sets])                  # (J, T, K, cycles)
     n = np.arange(1, cycles + 1, dtype=float)
-    at = np.array([np.concatenate([[np.interp(np.log(points[point_test == t]), np.log(n), c)
-                                    for c in s["curves"][t]] for t in range(curves.shape[1])], axis=1)
-                   for s in sets])                                   # (J, K, P)
+    at = np.array([s["at_points"] for s in sets])                   # (J, K, P)
     values = np.array([[s["values"][k] for k in names] for s in sets])
     return xr.Dataset({
         "parameter_value": (("set", "parameter"), values, {"units": "1", "long_name": "parameter values of the set"}),

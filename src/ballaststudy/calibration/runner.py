@@ -134,8 +134,9 @@ class Evaluator:
         for values, (key, per_test) in zip(batch, keyed):
             read = [[case_curve(j["out"], self.quantity, self.cycles) for j in js] for js in per_test]
             curves = np.array([[c for c, _ in r] for r in read])              # (T, K, cycles)
-            self.sets.append(dict(values=values, key=key, curves=curves,
+            at = np.concatenate([[at_points(c, t["points"]) for c in curves[j]]
+                                 for j, t in enumerate(self.tests)], axis=1)       # (K, P)
+            self.sets.append(dict(values=values, key=key, curves=curves, at_points=at,
                                   failed=[[f for _, f in r] for r in read]))
-            out.append(np.concatenate([[at_points(c, t["points"]) for c in curves[j]]
-                                       for j, t in enumerate(self.tests)], axis=1))
+            out.append(at)
         return out

@@ -252,6 +252,12 @@ AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors (then th
 ControllerIds = namedtuple("ControllerIds", "sides top profile sine segment_sensors")
 
 
+def segment_scales(n_groups, seg_len, t):
+    """Stress per summed x force of each membrane segment, left ones first (compression +:
+    the balls push the left wall towards -x): -+1 / (L t)."""
+    return [(-1.0 if k < n_groups // 2 else 1.0) / (seg_len * t) for k in range(n_groups)]
+
+
 def biaxial_control(rig):
     """Stress sensors of the moving walls (each side as a whole, and each membrane segment),
     their positions, and the controllers: the side servos (on while cycling), the top
@@ -270,9 +276,8 @@ def biaxial_control(rig):
                  v_max=p.servo_velocity_m_s, integral_steps=p.servo_integral_steps,
                  window_steps=p.consolidation_window_steps)
     if lay.left_groups:           # a servo per membrane segment, on its own stress
-        n, seg_len = len(lay.left_groups), h / len(lay.left_groups)
-        sensors = [c.wall_force(g, axis=0, scale=(-1.0 if k < n else 1.0) / (seg_len * t))
-                   for k, g in enumerate(groups)]
+        scales = segment_scales(len(groups), h / len(lay.left_groups), t)
+        sensors = [c.wall_force(g, axis=0, scale=f) for g, f in zip(groups, scales)]
     else:
         sensors = [LEFT, RIGHT]
     sides = [c.servo(sensor, c.walls(g, 0), gain=(-1.0 if k < len(groups) // 2 else 1.0)
@@ -353,9 +358,9 @@ class BiaxialRun(CyclicRun):
         travel); before, not after, so a resumed run does what an uninterrupted one does."""
         sensors = self.ids.segment_sensors
         if sensors:
-            seg_len, t = place_membrane(self.rig), self.rig.sim.thickness
-            for k, sensor in enumerate(sensors):
-                self.control.set_scale(sensor, (-1.0 if k < len(sensors) // 2 else 1.0) / (seg_len * t))
+            scales = segment_scales(len(sensors), place_membrane(self.rig), self.rig.sim.thickness)
+            for sensor, f in zip(sensors, scales):
+                self.control.set_scale(sensor, f)
         super().advance(max_steps)
 
     def on_window(self, controller):

@@ -154,8 +154,8 @@ def _case_run(args):
     attrs = {"assembled_file": str(args.assembled)}
     if args.conditions:
         attrs["measured_conditions_file"] = str(args.conditions)
-    attrs["material_parameters"] = (f"calibrated ({args.parameters}): {json.dumps(material)}"
-                                    if material else "table_4_2")
+    attrs["material_parameters"] = f"calibrated ({args.parameters})" if material else "table_4_2"
+    attrs["material_parameters_json"] = json.dumps(material)       # {} for Table 4.2's
     write_outputs(run, out, figures=not args.no_figures, attrs=attrs)
     if getattr(run.s, "failure", ""):     # a result (recorded in the file), not an error
         print(f"ballaststudy: note: {out}: {run.s.failure} (after {run.s.cycle} cycles)", file=sys.stderr)
