@@ -23,6 +23,12 @@ def _config(tmp_path, change):
     return path
 
 
+def _copy_workflow(tmp_path):
+    for part in ("Snakefile", "workflow", "config"):
+        src = ROOT / part
+        (shutil.copytree(src, tmp_path / part, symlinks=False) if src.is_dir() else shutil.copy(src, tmp_path))
+
+
 @pytest.mark.parametrize("change, key, allowed", [
     (lambda c: c["parameters"].update(E_star={"min": 1, "max": 2}), "calibration.parameters.E_star",
      "unknown key"),
@@ -45,9 +51,7 @@ def test_bad_calibration_config_is_one_line(tmp_path, capsys, change, key, allow
 
 
 def test_snakefile_refuses_a_target_that_is_no_test(tmp_path):
-    for part in ("Snakefile", "workflow", "config"):
-        src = ROOT / part
-        (shutil.copytree(src, tmp_path / part, symlinks=False) if src.is_dir() else shutil.copy(src, tmp_path))
+    _copy_workflow(tmp_path)
     cfg_path = tmp_path / "config" / "config.yaml"
     cfg = yaml.safe_load(cfg_path.read_text())
     cfg["calibration"]["targets"] = ["nobody/nothing"]
@@ -85,9 +89,7 @@ def test_calibrate_checks_before_any_case(tmp_path, capsys):
 def test_study_follows_the_calibration_when_asked(tmp_path):
     """study.parameters: calibrated -> every box case run depends on the calibrate target's
     calibrated.yaml (so the study reruns when the calibration changes)."""
-    for part in ("Snakefile", "workflow", "config"):
-        src = ROOT / part
-        (shutil.copytree(src, tmp_path / part, symlinks=False) if src.is_dir() else shutil.copy(src, tmp_path))
+    _copy_workflow(tmp_path)
     cfg_path = tmp_path / "config" / "config.yaml"
     cfg = yaml.safe_load(cfg_path.read_text())
     cfg["measured"]["data_dir"] = str(ROOT / cfg["measured"]["data_dir"])
@@ -150,3 +152,39 @@ def test_parameter_ranges_are_the_schemas():
             b = props[name]["properties"][bound]
             low = b.get("exclusiveMinimum", b.get("minimum"))
             assert (low, "exclusiveMinimum" in b, b["maximum"]) == (p.lowest, p.open_low, p.highest), name
+
+
+def _workflow_copy(tmp_path, change):
+    _copy_workflow(tmp_path)
+    box = tmp_path / "config" / "measured" / "planted"
+    box.mkdir()
+    (box / "box.yaml").write_text(yaml.safe_dump(dict(
+        source="planted", rig="box", load_max_kN=40.0,
+        curves=[dict(file="s.dat", quantity="settlement", units="mm", sign="compression_positive")])))
+    (box / "s.dat").write_text("1, 0.0\n2, 0.1\n5, 0.2\n")
+    cfg_path = tmp_path / "config" / "config.yaml"
+    cfg = yaml.safe_load(cfg_path.read_text())
+    change(cfg["calibration"])
+    cfg_path.write_text(yaml.safe_dump(cfg))
+    return subprocess.run(["snakemake", "--cores", "1", "-n", "-p", "calibrate"], cwd=tmp_path,
+                          capture_output=True, text=True)
+
+
+def test_a_box_target_is_calibrated_on_box_specimens(tmp_path):
+    out = _workflow_copy(tmp_path, lambda c: c.update(targets=["planted/box"], quantity="settlement"))
+    assert out.returncode == 0, out.stderr
+    assert "--rig box" in out.stdout and "--rig biaxial" not in out.stdout
+    assert "results/calibration/specimens/box/box_test/case0.nc" in out.stdout
+    assert "--width-m" not in out.stdout          # the box keeps the rig's size
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda c: c.update(targets=["planted/box"]), "calibration.quantity: axial_strain: the box rig"),
+    (lambda c: c.update(targets=["planted/box", "sun_et_al_16/p60_q230_f5"], name="mixed"),
+     "calibration.targets: planted/box, sun_et_al_16/p60_q230_f5 need the biaxial and box rigs"),
+])
+def test_snakefile_refuses_targets_the_rig_cannot_run(tmp_path, change, message):
+    out = _workflow_copy(tmp_path, change)
+    lines = [ln for ln in out.stderr.strip().splitlines() if not ln.startswith("note: ")]
+    assert out.returncode == 2 and len(lines) == 1, out.stderr
+    assert message in lines[0], lines[0]

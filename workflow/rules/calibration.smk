@@ -1,31 +1,36 @@
 # Calibration (thesis 4.3): the config's parameters fitted to one or more measured tests
-# with the biaxial rig -> results/calibration/<target, or calibration.name>/ (calibrated.yaml, evaluations.nc, posterior.nc,
+# with the rig that runs them (triaxial tests: biaxial; box tests: box)
+# -> results/calibration/<target, or calibration.name>/ (calibrated.yaml, evaluations.nc, posterior.nc,
 # figures, summary.md). `snakemake --cores 2 calibrate`; not part of `all`. The cases of
 # every parameter set are cached under cases/<hash>/: an interrupted run resumes.
-from ballaststudy.calibration.cli import check_targets
+from ballaststudy.calibration.cli import check_targets, targets_kind
 
 CALIBRATION = config["calibration"]
 CAL_TARGETS = CALIBRATION["targets"]
 try:                                      # before any job: one line, file and key
     CAL_OUT = f"{RESULTS}/calibration/{check_targets(config, CONFIG_FILE, MEASURED_TESTS)}"
+    CAL_KIND = targets_kind(config, CONFIG_FILE, MEASURED_TESTS_DIR) if MEASURED_TESTS else "biaxial"
 except ConfigError as err:
     stop(err)
+CAL_RIG = config["rig"].get(CAL_KIND) or {}
+# the biaxial specimen's size from the calibration section (a small specimen); the box's is the rig's
+CAL_SIZE = " ".join(f"--{k.replace('_', '-')} {CALIBRATION[k]}" for k in ("width_m", "height_m")
+                    if CAL_KIND == "biaxial" and CALIBRATION.get(k) is not None)
 
 
 rule calibration_assemble:
     input:
         bpm=f"{RESULTS}/bpm/{CALIBRATION['database']}.nc",
     output:
-        f"{RESULTS}/calibration/specimens/{CALIBRATION['database']}/case{{case}}.nc",
+        f"{RESULTS}/calibration/specimens/{CAL_KIND}/{CALIBRATION['database']}/case{{case}}.nc",
     params:
-        assembly=json.dumps((config["rig"].get("biaxial") or {}).get("assembly") or {}, sort_keys=True),
-        size=" ".join(f"--{k.replace('_', '-')} {CALIBRATION[k]}" for k in ("width_m", "height_m")
-                      if CALIBRATION.get(k) is not None),
+        assembly=json.dumps(CAL_RIG.get("assembly") or {}, sort_keys=True),
+        size=CAL_SIZE,
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/calibration/specimen{{case}}.log",
     shell:
-        "ballaststudy case assemble {input.bpm} --case {wildcards.case} --rig biaxial "
+        f"ballaststudy case assemble {{input.bpm}} --case {{wildcards.case}} --rig {CAL_KIND} "
         "{params.size} --config {params.config} --out {output} --quiet > {log} 2>&1"
 
 
@@ -33,7 +38,7 @@ rule calibrate:
     input:
         measured=[f"{RESULTS}/measured/{t}.nc" for t in CAL_TARGETS],
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in CAL_TARGETS],
-        specimens=expand(f"{RESULTS}/calibration/specimens/{CALIBRATION['database']}/case{{case}}.nc",
+        specimens=expand(f"{RESULTS}/calibration/specimens/{CAL_KIND}/{CALIBRATION['database']}/case{{case}}.nc",
                          case=range(CALIBRATION["cases"])),
     output:
         yaml=f"{CAL_OUT}/calibrated.yaml",
@@ -44,7 +49,7 @@ rule calibrate:
                        caption="../report/calibration.rst", category="Calibration"),
     params:
         calibration=json.dumps(CALIBRATION, sort_keys=True),
-        rig=json.dumps((config["rig"].get("biaxial") or {}).get("loading") or {}, sort_keys=True),
+        rig=json.dumps(CAL_RIG.get("loading") or {}, sort_keys=True),
         out_dir=CAL_OUT,
         config=CONFIG_FILE,
     threads: 256      # Snakemake caps it at --cores (workflow.cores breaks snakemake --report)

@@ -1,6 +1,8 @@
 """`ballaststudy calibrate`: the config's parameters (section ``calibration``) fitted to one
-or more measured triaxial/biaxial tests with the biaxial rig (thesis 4.3, automated); the
-tests' points are one curve for the likelihood.
+or more measured tests (thesis 4.3, automated) - triaxial/biaxial tests with the biaxial
+rig, box tests with the box rig (the specimens' kind decides); the tests' points are one
+curve for the likelihood. Box settlement is relative to the first cycle (thesis 4.5.1): a
+measured box curve is compared as given, so give it relative to its first cycle too.
 
     ballaststudy calibrate results/measured/<t1>.nc [<t2>.nc ...] --conditions
         config/measured/<t1>.yaml [...] --specimens S0.nc S1.nc ... --out-dir
@@ -25,6 +27,19 @@ METHOD = ("Gaussian-process surrogate of the ensemble-mean curve (scikit-learn, 
           "Latin-hypercube design, then rounds drawn from the posterior (space filling)")
 
 
+RIG_QUANTITIES = {"biaxial": ("axial_strain", "volumetric_strain"), "box": ("settlement",)}
+
+
+def specimens_kind(paths):
+    """The rig kind of the K assembled specimens; ConfigError if they differ."""
+    from ..rig.kinds import kind_of
+    kinds = [kind_of(open_netcdf(p, "assembled")) for p in paths]
+    if len(set(kinds)) > 1:
+        raise ConfigError(paths[kinds.index(kinds[-1])], "rig_kind", f"{kinds[-1]}, but "
+                          f"{paths[0]} is {kinds[0]}; allowed: specimens of one rig")
+    return kinds[0]
+
+
 def write_netcdf(ds, path):
     from ..atomic import atomic_path
     with atomic_path(path) as tmp:        # creates the folder; a partial file never stays
@@ -46,6 +61,35 @@ def check_targets(cfg, config_file, tests):
     return cal.get("name") or cal["targets"][0]
 
 
+def targets_kind(cfg, config_file, tests_dir):
+    """The rig kind that runs the calibration's targets (their conditions' ``rig``), checked
+    to be one kind that records calibration.quantity."""
+    from ..measured.importer import load_conditions
+    from ..rig.kinds import kind_for_test
+    cal = cfg["calibration"]
+    kinds = [kind_for_test(load_conditions(Path(tests_dir) / f"{t}.yaml")["rig"]) for t in cal["targets"]]
+    if len(set(kinds)) > 1:
+        raise ConfigError(config_file, "calibration.targets", f"{', '.join(cal['targets'])} need "
+                          f"the {' and '.join(sorted(set(kinds)))} rigs; allowed: tests of one rig")
+    if cal["quantity"] not in RIG_QUANTITIES[kinds[0]]:
+        raise ConfigError(config_file, "calibration.quantity", f"{cal['quantity']}: the {kinds[0]} "
+                          f"rig (the targets') does not record it; allowed: {', '.join(RIG_QUANTITIES[kinds[0]])}")
+    return kinds[0]
+
+
+def check_rig(path, config, cal, kind):
+    """ConfigError unless specimens of rig ``kind`` run the measured test and record
+    calibration.quantity."""
+    from ..rig.kinds import RUNS_TESTS
+    rig = open_netcdf(path, "measured").attrs.get("rig")
+    if rig not in RUNS_TESTS[kind]:
+        raise ConfigError(path, "rig", f"{rig}: the specimens are {kind} specimens; "
+                          f"allowed: {' or '.join(RUNS_TESTS[kind])} tests")
+    if cal["quantity"] not in RIG_QUANTITIES[kind]:
+        raise ConfigError(config, "calibration.quantity", f"{cal['quantity']}: the {kind} rig does "
+                          f"not record it; allowed: {', '.join(RIG_QUANTITIES[kind])}")
+
+
 def measured_points(path, config, cal):
     """(N, values) of a measured test's curve within the simulated cycles; ConfigError if
     fewer than two."""
@@ -54,9 +98,6 @@ def measured_points(path, config, cal):
     if q not in ds:
         raise ConfigError(path, q, f"the test has no {q} curve; allowed: "
                           f"{', '.join(v for v in ds.data_vars)}")
-    if ds.attrs.get("rig") not in ("triaxial", "biaxial"):
-        raise ConfigError(path, "rig", f"{ds.attrs.get('rig')}: the calibration runs the biaxial rig, "
-                          "for triaxial or biaxial tests (a box-rig runner is not built)")
     n, y = ds["cycle"].values, ds[q].values
     keep = np.isfinite(y) & (n >= 1) & (n <= cal["cycles"])
     if keep.sum() < 2:
@@ -70,7 +111,7 @@ def measured_points(path, config, cal):
 
 def _calibrate(args):
     from ..provenance import Recorder
-    from ..rig.biaxial import BiaxialRig
+    from ..rig.kinds import rig_classes
     from .bayes import calibrate, rmse
     from .parameters import PARAMETERS
     from .report import (calibrated_yaml, evaluations_dataset, plot_corner, plot_curves,
@@ -88,13 +129,16 @@ def _calibrate(args):
     for c in args.conditions:
         input_file(c, "expected the test's conditions YAML")
     measured = [measured_points(m, args.config, cal) for m in args.measured]
+    kind = specimens_kind(args.specimens)
+    for m in args.measured:
+        check_rig(m, args.config, cal, kind)
     points = np.concatenate([n for n, _ in measured])
     y = np.concatenate([v for _, v in measured])
     point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
     names = list(cal["parameters"])
     lower = np.array([cal["parameters"][k]["min"] for k in names], float)
     upper = np.array([cal["parameters"][k]["max"] for k in names], float)
-    rig = BiaxialRig.from_dataset(open_netcdf(args.specimens[0], "assembled"), "engine_checkpoint")
+    rig = rig_classes(kind)[0].from_dataset(open_netcdf(args.specimens[0], "assembled"), "engine_checkpoint")
     table = {k: PARAMETERS[k].table_4_2(rig) for k in names}
     t_before = np.array([table[k] for k in names])
     inside = bool(np.all((t_before >= lower) & (t_before <= upper)))
@@ -206,7 +250,7 @@ def register(subparsers):
     c.add_argument("--conditions", required=True, nargs="+", type=Path,
                    help="their conditions YAMLs, in the same order")
     c.add_argument("--specimens", required=True, nargs="+", type=Path,
-                   help="K assembled biaxial specimens (case assemble --rig biaxial)")
+                   help="K assembled specimens (case assemble; biaxial for triaxial tests, box for box tests)")
     c.add_argument("--out-dir", required=True, type=Path)
     c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
     c.add_argument("--config", default="config/config.yaml", type=Path)

@@ -19,7 +19,7 @@ from scipy import stats
 from ..atomic import atomic_path
 from ..config import ConfigError
 from ..inputs import open_netcdf
-from ..metrics.output import VARIABLES
+from ..metrics.output import VARIABLES, display_scale
 from ..study import scale
 from ..study.optimise import UNDECIDED_AT_SCALE, three_way
 from .parameters import PARAMETERS
@@ -110,7 +110,7 @@ def plot_parameter(path, ds, name):
     sel = ds["parameter"].values == name
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), dpi=110)
     for ax, k in zip(axes, OUTPUTS):
-        scale_, unit = (1e3, "mm") if VARIABLES[k][0] == "m" else (100.0, "%")
+        scale_, unit = display_scale(k)
         for v in np.unique(ds["value"].values[sel]):
             y = scale_ * ds[k].values[sel & (ds["value"].values == v)]
             m = np.nanmean(y, axis=0)

@@ -7,7 +7,7 @@ import xarray as xr
 import yaml
 
 from ..atomic import atomic_path
-from ..metrics.output import VARIABLES
+from ..metrics.output import VARIABLES, display_scale
 from .parameters import PARAMETERS
 
 CF = "CF-1.8"
@@ -74,20 +74,21 @@ def plot_curves(path, ds, quantity, before, after, title):
     fig, axes = plt.subplots(1, tests, figsize=(6.5 * tests, 4), dpi=110, squeeze=False)
     n = ds["cycle"].values
     names = ds.attrs["targets"].split(", ")
+    factor, unit = display_scale(quantity)
     for t, ax in enumerate(axes[0]):
         for j, label, colour in ((before, "Table 4.2", "0.5"), (after, "calibrated", "C0")):
-            c = 100 * ds[quantity].values[j, t]
+            c = factor * ds[quantity].values[j, t]
             for case in c:
                 ax.plot(n, case, color=colour, lw=0.6, alpha=0.6)
             m, s = c.mean(axis=0), c.std(axis=0, ddof=1)
             ax.plot(n, m, color=colour, lw=2, label=f"{label}: ensemble mean of {c.shape[0]}")
             ax.fill_between(n, m - s, m + s, color=colour, alpha=0.2)
         mine = ds["point_test"].values == t
-        ax.plot(ds["measured_cycle"].values[mine], 100 * ds["measured_" + quantity].values[mine], "ko",
+        ax.plot(ds["measured_cycle"].values[mine], factor * ds["measured_" + quantity].values[mine], "ko",
                 ms=4, label="measured")
         ax.set_xscale("log")
         ax.set_xlabel("load cycles N")
-        ax.set_ylabel(quantity.replace("_", " ") + " [%]")
+        ax.set_ylabel(f"{quantity.replace('_', ' ')} [{unit}]")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         ax.set_title(names[t].split("/")[-1], fontsize=8)

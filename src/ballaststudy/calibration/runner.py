@@ -1,5 +1,6 @@
-"""The model a calibration evaluates: one parameter set = K biaxial cases, the same K
-assembled specimens loaded under the measured test's conditions with the set's parameters.
+"""The model a calibration evaluates: one parameter set = K cases, the same K assembled
+specimens (biaxial for triaxial/biaxial tests, box for box tests) loaded under the
+measured test's conditions with the set's parameters.
 Cases run in parallel processes; each finished case is a metrics.nc under
 ``cases/<hash of the set>/case<k>.nc`` (with its checkpoint while it runs), so an
 interrupted calibration resumes without repeating finished cases.
@@ -35,23 +36,24 @@ def run_case(job):
     (the config's with the test's conditions), run
     ``cycles`` cycles (resuming from its checkpoint), write metrics.nc. Returns its path."""
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    from ..rig.biaxial import BiaxialParams, BiaxialRig, BiaxialRun, write_biaxial_outputs
+    from ..rig.kinds import kind_of, params_class, rig_classes
     from .parameters import apply_parameters
     out = Path(job["out"])
     if out.is_file():
         return str(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     ckpt = out.with_name(out.stem + ".checkpoint.npz")
+    assembled = open_netcdf(job["specimen"], "assembled")
+    rig_class, run_class, write_outputs = rig_classes(kind_of(assembled))
     if ckpt.is_file():
-        run = BiaxialRun.from_checkpoint(ckpt, cycles=job["cycles"])
+        run = run_class.from_checkpoint(ckpt, cycles=job["cycles"])
     else:
-        params = BiaxialParams(**job["rig"])
-        rig = BiaxialRig.from_dataset(open_netcdf(job["specimen"], "assembled"), "engine_checkpoint")
-        rig.params = params
+        rig = rig_class.from_dataset(assembled, "engine_checkpoint")
+        rig.params = params_class(kind_of(assembled))(**job["rig"])
         apply_parameters(rig, job["values"])
-        run = BiaxialRun(rig, job["cycles"], checkpoint=ckpt)
+        run = run_class(rig, job["cycles"], checkpoint=ckpt, metrics=job["metrics"])
     run.run()
-    write_biaxial_outputs(run, out, figures=False, attrs={
+    write_outputs(run, out, figures=False, attrs={
         "assembled_file": str(job["specimen"]), "measured_conditions_file": str(job["conditions"]),
         "calibration_parameters_json": json.dumps(job["values"])})
     ckpt.unlink(missing_ok=True)
@@ -90,25 +92,28 @@ class Evaluator:
         """tests: [(conditions YAML, measured N within the cycles)], one per target."""
         from ..config import load_config
         from ..measured.importer import load_conditions
-        from ..rig.biaxial import BiaxialParams
+        from ..rig.kinds import kind_of, params_from_config
         self.names, self.specimens = list(names), [str(s) for s in specimens]
         self.cycles, self.quantity = int(cycles), quantity
         self.out_dir, self.jobs, self.progress = Path(out_dir), int(jobs), progress
+        self.kind = kind_of(open_netcdf(self.specimens[0], "assembled"))
+        cfg = load_config(config)      # read once: a config edited meanwhile changes nothing
+        self.metrics = cfg.get("metrics")
         self.tests = []
         for conditions, points in tests:
-            params = BiaxialParams.from_config(load_config(config).get("rig", {}))
+            params = params_from_config(self.kind, cfg.get("rig", {}))
             params.take_conditions(load_conditions(conditions))
-            # read once: a config edited meanwhile changes nothing
             self.tests.append(dict(conditions=str(conditions), points=np.asarray(points, float),
                                    rig=params.to_dict()))
         self.context = {"cycles": self.cycles, "rig": [t["rig"] for t in self.tests],
+                        "metrics": self.metrics,
                         "specimens": [Path(s).name for s in self.specimens]}
         self.sets = []
 
     def jobs_for(self, values):
         key = set_key(values, self.context)
         return key, [[dict(specimen=s, values=values, cycles=self.cycles, rig=t["rig"],
-                           conditions=t["conditions"],
+                           metrics=self.metrics, conditions=t["conditions"],
                            out=str(self.out_dir / "cases" / key / f"test{j}" / f"case{k}.nc"))
                       for k, s in enumerate(self.specimens)] for j, t in enumerate(self.tests)]
 

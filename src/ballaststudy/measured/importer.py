@@ -28,6 +28,9 @@ def load_conditions(path):
     for key in NEEDS[cfg["rig"]]:
         if cfg.get(key) is None:
             raise ConfigError(path, key, f"required for a {cfg['rig']} test")
+    for low, high in (("deviator_min_kPa", "deviator_max_kPa"), ("load_min_kN", "load_max_kN")):
+        if cfg.get(low) is not None and cfg.get(high) is not None and not cfg[low] < cfg[high]:
+            raise ConfigError(path, low, f"{cfg[low]:g}; allowed: below {high} ({cfg[high]:g})")
     seen = set()
     for k, c in enumerate(cfg["curves"]):
         strain = c["quantity"] != "settlement"

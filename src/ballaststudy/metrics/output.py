@@ -37,6 +37,11 @@ VARIABLES = {
 }
 
 
+def display_scale(name):
+    """(factor, unit) to plot a variable in: lengths in mm, fractions in %."""
+    return (1e3, "mm") if VARIABLES[name][0] == "m" else (100.0, "%")
+
+
 def metrics_dataset(rows, attrs=None):
     """Dataset with dimension ``cycle`` from a list of ``compute_cycle`` results (cycle k =
     rows[k]); the variables the rows give (one table for every rig). Unknown keys raise;

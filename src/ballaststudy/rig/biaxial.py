@@ -83,6 +83,9 @@ class BiaxialParams(DepositionParams):
             self.deviator_min_kPa = c["deviator_min_kPa"]
         if c.get("frequency_Hz") is not None:
             self.frequency_Hz = c["frequency_Hz"]
+        if not self.deviator_min_kPa < self.deviator_max_kPa:
+            raise ValueError(f"deviator {self.deviator_min_kPa:g}-{self.deviator_max_kPa:g} kPa: "
+                             "the minimum must be below the maximum")
 
 
 @dataclass

@@ -16,7 +16,8 @@ from tqdm import tqdm
 from ..config import ConfigError, load_config
 from ..inputs import open_netcdf, writable_dir, writable_file
 from ..provenance import Recorder
-from .params import RigParams, case_seed
+from .kinds import RUNS_TESTS, kind_of, params_from_config, rig_classes
+from .params import case_seed
 from ..argtypes import SEED, integer, number
 
 
@@ -26,11 +27,7 @@ def _kind(args, cfg):
 
 def _params(args, kind=None):
     cfg = load_config(args.config)
-    kind = kind or _kind(args, cfg)
-    if kind == "biaxial":
-        from .biaxial import BiaxialParams
-        return cfg, BiaxialParams.from_config(cfg.get("rig", {}))
-    return cfg, RigParams.from_config(cfg.get("rig", {}))
+    return cfg, params_from_config(kind or _kind(args, cfg), cfg.get("rig", {}))
 
 
 def _case_assemble(args):
@@ -66,38 +63,31 @@ def _case_assemble(args):
               f"steps {lay.stage_steps}")
 
 
-def _rig_classes(kind):
-    """(Rig class, run class, output writer) of a rig kind."""
-    if kind == "biaxial":
-        from .biaxial import BiaxialRig, BiaxialRun, write_biaxial_outputs
-        return BiaxialRig, BiaxialRun, write_biaxial_outputs
-    from .box import BoxRig
-    from .loading import LoadingRun
-    from .output import write_outputs
-    return BoxRig, LoadingRun, write_outputs
-
-
 def _measured_conditions(args, kind, params):
-    """A biaxial run under a measured test's conditions (p, q bounds, f) and/or a mode."""
-    if kind != "biaxial":
-        raise ConfigError(args.assembled, None, "--conditions / --mode need a biaxial case")
+    """A run under a measured test's conditions (biaxial: p, q bounds, f; box: the load
+    bounds) and/or a biaxial mode."""
     if args.mode:
+        if kind != "biaxial":
+            raise ConfigError(args.assembled, None, "--mode needs a biaxial case")
         params.mode = args.mode
     if args.conditions:
         from ..measured.importer import load_conditions
         c = load_conditions(args.conditions)
-        if c["rig"] not in ("triaxial", "biaxial"):
-            raise ConfigError(args.conditions, "rig", f"{c['rig']}: a biaxial case runs "
-                              "triaxial or biaxial conditions")
-        params.take_conditions(c)
+        if c["rig"] not in RUNS_TESTS[kind]:
+            raise ConfigError(args.conditions, "rig", f"{c['rig']}: a {kind} case runs "
+                              f"{' or '.join(RUNS_TESTS[kind])} conditions")
+        try:
+            params.take_conditions(c)
+        except ValueError as err:     # a bound of the test against the config's other bound
+            raise ConfigError(args.conditions, None, str(err)) from None
 
 
 def _case_run(args):
     out = writable_file(args.out)
     ckpt = writable_file(out.with_name(out.stem + ".checkpoint.npz"))
     assembled = open_netcdf(args.assembled, "assembled")
-    kind = str(assembled.attrs.get("rig_kind", "box"))     # files from before the biaxial rig: box
-    rig_class, run_class, write_outputs = _rig_classes(kind)
+    kind = kind_of(assembled)
+    rig_class, run_class, write_outputs = rig_classes(kind)
     cfg, params = _params(args, kind)
     if args.conditions or args.mode:
         _measured_conditions(args, kind, params)
@@ -196,8 +186,8 @@ def register(subparsers):
     r.add_argument("--stop-after", type=integer(1, 10_000_000), help=argparse_suppress())
     r.add_argument("--no-vtk", action="store_true", help="write no VTK snapshots")
     r.add_argument("--no-figures", action="store_true", help="write no PNG figures")
-    r.add_argument("--conditions", type=Path, help="biaxial: run under this measured test's "
-                   "p, q bounds and f (its conditions YAML)")
+    r.add_argument("--conditions", type=Path, help="run under this measured test's "
+                   "conditions (its YAML; biaxial: p, q bounds and f; box: the load bounds)")
     r.add_argument("--mode", choices=("quasi_static", "real_time"), help="biaxial: override "
                    "the loading mode")
     r.add_argument("--parameters", type=Path, help="a calibrated.yaml (ballaststudy calibrate): "

@@ -59,6 +59,24 @@ class RigParams(DepositionParams):
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
     max_cycle_steps: int = 5000000
 
+    def take_conditions(self, c):
+        """A measured box test's load bounds (``measured.importer.load_conditions``), applied
+        to the 2D rig as given, as the thesis applied the box test's loads. The static
+        preloads and the settlement force keep their place relative to the cycle, as in
+        4.2.3 (10, 20, 30 kN before cycles of 15-45 kN, settlement read at 30 kN): scaled so
+        the last preload and the settlement force are the cycle's mean load. The frequency
+        is not used: the box rig loads quasi-statically."""
+        self.cyclic_max_kN = float(c["load_max_kN"])
+        if c.get("load_min_kN") is not None:
+            self.cyclic_min_kN = float(c["load_min_kN"])
+        if not self.cyclic_min_kN < self.cyclic_max_kN:
+            raise ValueError(f"cyclic load {self.cyclic_min_kN:g}-{self.cyclic_max_kN:g} kN: "
+                             "the minimum must be below the maximum")
+        mean = 0.5 * (self.cyclic_min_kN + self.cyclic_max_kN)
+        ratio = mean / self.static_loads_kN[-1]
+        self.static_loads_kN = [load * ratio for load in self.static_loads_kN]
+        self.settlement_force_kN = mean
+
     def to_config(self):
         """The ``rig:`` dict these parameters come from (by stage)."""
         d = self.to_dict()
