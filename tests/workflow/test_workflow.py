@@ -73,12 +73,13 @@ def test_whole_chain_is_planned(study):
 
 
 def test_parametric_study_is_planned(study):
-    """`snakemake parametric`: 5 F_str_co and 4 mu values, parametric.cases runs each on the
-    study's assembled cases, one report; not part of `all`."""
+    """`snakemake parametric`: 5 F_str_co and 4 mu values and the design sets, parametric.cases
+    runs each on the study's assembled cases, one report; not part of `all`."""
     cfg = yaml.safe_load((study / "config" / "config.yaml").read_text())
     par = cfg["parametric"]
     jobs = _jobs(_snakemake(study, "-n", "parametric"))
-    n_values = len(par["F_str_co"]) + len(par["mu"])
+    n_values = len(par["F_str_co"]) + len(par["mu"]) + par["design_sets"]
+    assert par["design_sets"] >= 4
     assert jobs == {"parametric_setting": n_values, "parametric_run": n_values * par["cases"],
                     "case_assemble": par["cases"], "bpm_build": 1, "parametric": 1}, jobs
 

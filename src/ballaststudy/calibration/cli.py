@@ -13,6 +13,7 @@ before any case runs; finished cases are reused (runner.py), so an interrupted c
 resumes. Writes evaluations.nc, posterior.nc, calibrated.yaml, curves.png, corner.png and
 summary.md into the folder."""
 import time
+from argparse import ArgumentTypeError
 from pathlib import Path
 
 import numpy as np
@@ -197,22 +198,32 @@ def _calibrate(args):
 
 
 def _setting(args):
-    """A calibrated.yaml of one varied parameter (the parametric study's runs)."""
+    """A calibrated.yaml of the parametric study's runs: NAME VALUE [NAME VALUE ...]."""
     import yaml
 
     from ..atomic import atomic_path
     from .parameters import PARAMETERS
     out = writable_file(args.out)
-    if args.name not in PARAMETERS:
-        raise ConfigError(args.out, "parameters", f"{args.name}: unknown; allowed: {', '.join(PARAMETERS)}")
+    if len(args.pairs) % 2:
+        raise ConfigError(args.out, "parameters", f"{' '.join(args.pairs)}: allowed: NAME VALUE pairs")
+    values = {}
+    for name, text in zip(args.pairs[::2], args.pairs[1::2]):
+        if name not in PARAMETERS:
+            raise ConfigError(args.out, "parameters", f"{name}: unknown; allowed: {', '.join(PARAMETERS)}")
+        try:
+            values[name] = number(1e-9, 1000)(text)
+        except ArgumentTypeError as err:
+            raise ConfigError(args.out, f"parameters.{name}", str(err)) from None
     with atomic_path(out) as tmp:
-        tmp.write_text(yaml.safe_dump({"parameters": {args.name: args.value}}))
+        tmp.write_text(yaml.safe_dump({"parameters": values}))
 
 
 def _parametric_report(args):
     from ..provenance import Recorder
-    from .parametric import (cases_per_value, findings, parametric_dataset, plot_parameter,
-                             report_markdown, slope_table)
+    import json
+
+    from .parametric import (DESIGN, cases_per_value, findings, parametric_dataset, plot_parameter,
+                             report_markdown, sensitivity_table, slope_table)
     out = writable_dir(args.out_dir)
     recorder = Recorder("parametric report", inputs=[input_file(p, "expected a netCDF file") for p in args.cases])
     ds = parametric_dataset(args.cases)
@@ -220,10 +231,12 @@ def _parametric_report(args):
     cycles = ds.sizes["cycle"]
     table = slope_table(ds)
     marks = findings(table, cases, cycles)
+    sobol = sensitivity_table(ds)
+    ds.attrs["sobol_indices_json"] = json.dumps(sobol)
     files = [out / "parametric.nc", out / "report.md"]
     write_netcdf(ds, files[0])
-    report_markdown(files[1], table, marks, cases, cycles)
-    for name in sorted(set(ds["parameter"].values)):
+    report_markdown(files[1], table, marks, cases, cycles, sobol)
+    for name in sorted(set(ds["parameter"].values) - {DESIGN}):
         files.append(out / f"{name}.png")
         plot_parameter(files[-1], ds, name)
     recorder.finish()
@@ -235,9 +248,8 @@ def _parametric_report(args):
 def register(subparsers):
     p = subparsers.add_parser("parametric", help="the parametric study's settings and report (thesis 4.4)")
     ps = p.add_subparsers(dest="action", required=True)
-    s = ps.add_parser("setting", help="a calibrated.yaml varying one parameter")
-    s.add_argument("name", help="F_str_co or mu")
-    s.add_argument("value", type=number(1e-9, 1000))
+    s = ps.add_parser("setting", help="a calibrated.yaml of the varied parameter(s)")
+    s.add_argument("pairs", nargs="+", metavar="NAME VALUE", help="F_str_co and/or mu, each with its value")
     s.add_argument("--out", required=True, type=Path)
     s.set_defaults(func=_setting)
     r = ps.add_parser("report", help="slopes, sensitivity, the thesis' findings, figures")
