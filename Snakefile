@@ -52,6 +52,7 @@ include: "workflow/rules/measured.smk"
 include: "workflow/rules/calibration.smk"
 include: "workflow/rules/cases.smk"
 include: "workflow/rules/parametric.smk"
+include: "workflow/rules/loop.smk"
 include: "workflow/rules/study.smk"
 
 

@@ -17,6 +17,7 @@ from .forms.validate import SUMMARY_COLUMNS, validation_row
 from .inputs import input_dir, input_file, open_netcdf, writable_dir, writable_file
 from .bpm.cli import register as register_bpm
 from .calibration.cli import register as register_calibrate
+from .loop.cli import register as register_loop
 from .measured.cli import register as register_measured
 from .rig.cli import register as register_case
 from .study.cli import register as register_study
@@ -173,6 +174,7 @@ def build_parser():
     register_study(sub)
     register_measured(sub)
     register_calibrate(sub)
+    register_loop(sub)
 
     c = sub.add_parser("config", help="configuration")
     cs = c.add_subparsers(dest="action", required=True)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ballaststudy.calibration.bayes import initial_design
-from ballaststudy.loop.select import choose, held_out_candidate, held_out_plain
+from ballaststudy.loop.select import choose, fit_all, held_out_candidate, held_out_plain
 
 TESTS = 7
 FREQ = np.array([5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0])     # a declared covariate per test
@@ -45,22 +45,25 @@ def _loop(truth, seed):
     n, point_test = _points(rng)
     measured = _specimens(rng, n, point_test, truth, 0.6, 1)[0] + rng.normal(0, MEAS_SD, len(n))
     plain = held_out_plain(_specimens(rng, n, point_test, None, 0.0, K), measured, point_test, MEAS_SD ** 2)
-    held = {}
+    held, fits = {}, {}
     for name in EFFECTS:
         thetas = initial_design([0.0], [1.0], SETS, seed=seed + 1)
         curves = [_specimens(rng, n, point_test, name, th[0], K) for th in thetas]
         held[name] = held_out_candidate(thetas, curves, measured, point_test, [0.0], [1.0], MEAS_SD ** 2)
+        fits[name] = fit_all(thetas, curves, measured, point_test, [0.0], [1.0], MEAS_SD ** 2)
     chosen, evidence = choose(held, plain)
-    return chosen, evidence, held, plain, measured, point_test
+    return chosen, evidence, held, plain, measured, point_test, fits
 
 
 @pytest.mark.parametrize("truth", list(EFFECTS))
 def test_the_planted_effect_is_named_and_halves_the_held_out_error(truth):
-    chosen, evidence, held, plain, measured, point_test = _loop(truth, seed=7)
+    chosen, evidence, held, plain, measured, point_test, fits = _loop(truth, seed=7)
     assert chosen == truth, evidence
     before, after = plain.rmse(measured, point_test), held[truth].rmse(measured, point_test)
     assert after < 0.5 * before, (before, after)
     assert np.all(np.abs(held[truth].theta_mean[:, 0] - 0.6) < 0.25)     # each fold near the truth
+    mean, interval, ess = fits[truth]
+    assert interval[0, 0] <= 0.6 <= interval[0, 1] and ess > 10
 
 
 @pytest.mark.parametrize("seed", [3, 11])

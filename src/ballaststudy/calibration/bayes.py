@@ -22,11 +22,13 @@ cases, so y - surrogate mean has variance sigma^2 (1 + 1/K) with sigma^2 the poo
 variance:  noise_var = pooled_var * (1 + 1/K) + measurement_var  (the last term optional).
 With different K per set, calibrate() uses the average of 1/K_j.
 """
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import logsumexp
 from scipy.stats import qmc
+from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
@@ -101,7 +103,9 @@ class Surrogate:
         kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(length_scale=[0.3] * d, length_scale_bounds=(0.02, 10.0))
                   + WhiteKernel(1e-2, (1e-8, 1.0)))
         self.gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=5, random_state=self.seed)
-        self.gp.fit(_to_unit(thetas, self.lower, self.upper), (means - self.y_mean) / self.y_std)
+        with warnings.catch_warnings():     # a hyperparameter at its bound: expected with few sets
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            self.gp.fit(_to_unit(thetas, self.lower, self.upper), (means - self.y_mean) / self.y_std)
         return self
 
     def predict(self, thetas):

@@ -78,7 +78,7 @@ def targets_kind(cfg, config_file, tests_dir):
     return kinds[0]
 
 
-def check_rig(path, config, cal, kind):
+def check_rig(path, config, cal, kind, section="calibration"):
     """ConfigError unless specimens of rig ``kind`` run the measured test and record
     calibration.quantity."""
     from ..rig.kinds import RUNS_TESTS
@@ -87,11 +87,11 @@ def check_rig(path, config, cal, kind):
         raise ConfigError(path, "rig", f"{rig}: the specimens are {kind} specimens; "
                           f"allowed: {' or '.join(RUNS_TESTS[kind])} tests")
     if cal["quantity"] not in RIG_QUANTITIES[kind]:
-        raise ConfigError(config, "calibration.quantity", f"{cal['quantity']}: the {kind} rig does "
+        raise ConfigError(config, f"{section}.quantity", f"{cal['quantity']}: the {kind} rig does "
                           f"not record it; allowed: {', '.join(RIG_QUANTITIES[kind])}")
 
 
-def measured_points(path, config, cal):
+def measured_points(path, config, cal, section="calibration"):
     """(N, values) of a measured test's curve within the simulated cycles; ConfigError if
     fewer than two."""
     ds = open_netcdf(path, "measured")
@@ -103,7 +103,7 @@ def measured_points(path, config, cal):
     keep = np.isfinite(y) & (n >= 1) & (n <= cal["cycles"])
     if keep.sum() < 2:
         second = np.sort(n[np.isfinite(y) & (n >= 1)])[1:2]
-        raise ConfigError(config, "calibration.cycles",
+        raise ConfigError(config, f"{section}.cycles",
                           f"{cal['cycles']} cycles hold {int(keep.sum())} measured point(s) of "
                           f"{path}; allowed: at least the second point's N "
                           f"({second[0]:.0f})" if second.size else "the test has < 2 points")

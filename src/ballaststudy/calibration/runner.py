@@ -1,6 +1,7 @@
-"""The model a calibration evaluates: one parameter set = K cases, the same K assembled
-specimens (biaxial for triaxial/biaxial tests, box for box tests) loaded under the
-measured test's conditions with the set's parameters.
+"""The model a calibration (or the loop, issue 14) evaluates: one parameter set = K cases,
+the same K assembled specimens (biaxial for triaxial/biaxial tests, box for box tests)
+loaded under the measured test's conditions with the set's parameters - material
+parameters (calibration.parameters), or an effect's (loop.effects) on top of fixed ones.
 Cases run in parallel processes; each finished case is a metrics.nc under
 ``cases/<hash of the set>/case<k>.nc`` (with its checkpoint while it runs), so an
 interrupted calibration resumes without repeating finished cases.
@@ -36,6 +37,8 @@ def run_case(job):
     (the config's with the test's conditions), run
     ``cycles`` cycles (resuming from its checkpoint), write metrics.nc. Returns its path."""
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    from ..loop.effects import hooks, switch_on
+    from ..measured.importer import load_conditions
     from ..rig.kinds import kind_of, params_class, rig_classes
     from .parameters import apply_parameters
     out = Path(job["out"])
@@ -51,11 +54,16 @@ def run_case(job):
         rig = rig_class.from_dataset(assembled, "engine_checkpoint")
         rig.params = params_class(kind_of(assembled))(**job["rig"])
         apply_parameters(rig, job["values"])
+        if job["effect"]:
+            switch_on(job["effect"], rig, job["effect_values"], load_conditions(job["conditions"]))
         run = run_class(rig, job["cycles"], checkpoint=ckpt, metrics=job["metrics"])
+    if job["effect"]:                   # hooks are not in a checkpoint: again on resume
+        run.hooks += hooks(job["effect"], job["effect_values"])
     run.run()
     write_outputs(run, out, figures=False, attrs={
         "assembled_file": str(job["specimen"]), "measured_conditions_file": str(job["conditions"]),
-        "calibration_parameters_json": json.dumps(job["values"])})
+        "calibration_parameters_json": json.dumps(job["values"]),
+        "effect": job["effect"] or "none", "effect_parameters_json": json.dumps(job["effect_values"])})
     ckpt.unlink(missing_ok=True)
     return str(out)
 
@@ -88,8 +96,10 @@ class Evaluator:
     (T, K, cycles) and failures (``self.sets``)."""
 
     def __init__(self, names, specimens, tests, config, cycles, quantity, out_dir, jobs=1,
-                 progress=False):
-        """tests: [(conditions YAML, measured N within the cycles)], one per target."""
+                 progress=False, effect=None, base=None):
+        """tests: [(conditions YAML, measured N within the cycles)], one per target;
+        ``names``: the parameters varied - material ones, or ``effect``'s (loop.effects)
+        with the material parameters fixed at ``base`` ({name: value}; {}: Table 4.2's)."""
         from ..config import load_config
         from ..measured.importer import load_conditions
         from ..rig.kinds import kind_of, params_from_config
@@ -105,14 +115,17 @@ class Evaluator:
             params.take_conditions(load_conditions(conditions))
             self.tests.append(dict(conditions=str(conditions), points=np.asarray(points, float),
                                    rig=params.to_dict()))
+        self.effect, self.base = effect, dict(base or {})
         self.context = {"cycles": self.cycles, "rig": [t["rig"] for t in self.tests],
-                        "metrics": self.metrics,
+                        "metrics": self.metrics, "effect": effect, "base": self.base,
                         "specimens": [Path(s).name for s in self.specimens]}
         self.sets = []
 
     def jobs_for(self, values):
         key = set_key(values, self.context)
-        return key, [[dict(specimen=s, values=values, cycles=self.cycles, rig=t["rig"],
+        material, effect_values = (self.base, values) if self.effect else (values, {})
+        return key, [[dict(specimen=s, values=material, cycles=self.cycles, rig=t["rig"],
+                           effect=self.effect, effect_values=effect_values,
                            metrics=self.metrics, conditions=t["conditions"],
                            out=str(self.out_dir / "cases" / key / f"test{j}" / f"case{k}.nc"))
                       for k, s in enumerate(self.specimens)] for j, t in enumerate(self.tests)]

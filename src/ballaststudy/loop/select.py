@@ -34,7 +34,7 @@ import numpy as np
 from scipy.special import logsumexp
 from scipy.stats import qmc, wilcoxon
 
-from ..calibration.bayes import Surrogate, _box, _from_unit
+from ..calibration.bayes import Surrogate, _box, _from_unit, weighted_quantile
 
 SHRINK = 0.1          # weight of the diagonal in the shrunk case covariance
 ALPHA = 0.05          # family-wise level of the rule over the candidates
@@ -90,18 +90,25 @@ class HeldOut:
         return float(np.sqrt(np.mean((np.asarray(y)[sel] - self.predicted[sel]) ** 2)))
 
 
-def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, measurement_var,
-                       n_samples=4096, seed=0):
-    """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P))."""
+def _sampled(thetas, curves_list, y, point_test, lower, upper, measurement_var, n_samples, seed):
+    """(prior samples (M, d), surrogate means (M, P), log-likelihood per test (M, T))."""
     lower, upper = _box(lower, upper)
-    y, point_test = np.asarray(y, float), np.asarray(point_test)
     surrogate = Surrogate(lower, upper, seed).fit(thetas, [c.mean(axis=0) for c in curves_list])
     exponent = max(int(np.ceil(np.log2(n_samples))), 0)
     samples = _from_unit(qmc.Sobol(len(lower), rng=seed).random_base2(exponent), lower, upper)
     mean, sd = surrogate.predict(samples)
-    loglik = per_test_loglik(mean, sd, y, point_test, residual_covariances(curves_list, point_test, measurement_var))
+    covs = residual_covariances(curves_list, point_test, measurement_var)
+    return samples, mean, per_test_loglik(mean, sd, np.asarray(y, float), point_test, covs)
+
+
+def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, measurement_var,
+                       n_samples=4096, seed=0):
+    """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P))."""
+    y, point_test = np.asarray(y, float), np.asarray(point_test)
+    samples, mean, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper,
+                                     measurement_var, n_samples, seed)
     tests = np.unique(point_test)
-    lpd, predicted, theta_mean = np.empty(len(tests)), np.empty(len(y)), np.empty((len(tests), len(lower)))
+    lpd, predicted, theta_mean = np.empty(len(tests)), np.empty(len(y)), np.empty((len(tests), samples.shape[1]))
     for j, t in enumerate(tests):
         log_w = loglik[:, np.arange(len(tests)) != j].sum(axis=1)
         log_w -= logsumexp(log_w)
@@ -111,6 +118,17 @@ def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, measure
         predicted[sel] = w @ mean[:, sel]
         theta_mean[j] = w @ samples
     return HeldOut(lpd, predicted, theta_mean)
+
+
+def fit_all(thetas, curves_list, y, point_test, lower, upper, measurement_var, n_samples=4096, seed=0):
+    """The candidate's parameter(s) from every test: posterior mean, 90 % interval (d, 2),
+    effective sample size, with the same likelihood as the held-out densities."""
+    samples, _, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper,
+                                  measurement_var, n_samples, seed)
+    log_w = loglik.sum(axis=1)
+    w = np.exp(log_w - logsumexp(log_w))
+    interval = np.array([weighted_quantile(s, w, [0.05, 0.95]) for s in samples.T])
+    return w @ samples, interval, float(1.0 / np.sum(w ** 2))
 
 
 def held_out_plain(curves, y, point_test, measurement_var):

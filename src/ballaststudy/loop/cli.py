@@ -1,0 +1,148 @@
+"""`ballaststudy loop`: close the loop with measured data (issue 14).
+
+    ballaststudy loop results/measured/<t1>.nc ... --conditions config/measured/<t1>.yaml ...
+        --specimens S0.nc S1.nc ... --out-dir results/loop [--parameters calibrated.yaml]
+        [--jobs 2] [--config config/config.yaml]
+
+1. The plain model (Table 4.2's or calibrated parameters): K cases under every test; the
+   residual per test in the DEM horizon (loop/residual.py) and its relation to the tests'
+   covariates.
+2. Every candidate effect (loop.effects): K cases under every test at a design of its
+   parameter; held-out (leave one test out) predictive densities and the rule
+   (loop/select.py) choose one effect or none.
+3. The chosen effect at its parameter fitted on all tests, run again: the error after.
+4. The long-term horizon: Sato's law fitted to each ensemble (loop/accumulation.py) carries
+   it to the measured points beyond the simulated cycles, reported apart.
+Writes loop.nc, report.md, chosen.yaml and one figure per test into the folder; the cases
+are cached by parameter hash under cases/ (an interrupted loop resumes)."""
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..argtypes import integer
+from ..config import ConfigError, load_config
+from ..inputs import input_file, writable_dir
+
+
+def check_loop_targets(cfg, config_file, tests, tests_dir):
+    """Every loop.targets entry a measured triaxial/biaxial test (names relative to
+    measured.tests_dir) when there are any, each once; ConfigError naming the key."""
+    from ..measured.importer import load_conditions
+    targets = cfg["loop"]["targets"]
+    for k, target in enumerate(targets):
+        if tests and target not in tests:
+            raise ConfigError(config_file, f"loop.targets[{k}]", f"{target!r} is not a measured test "
+                              f"under {cfg['measured']['tests_dir']}; allowed: {', '.join(tests)}")
+        if targets.index(target) != k:
+            raise ConfigError(config_file, f"loop.targets[{k}]", f"{target!r} given twice; allowed: each test once")
+        if tests and load_conditions(Path(tests_dir) / f"{target}.yaml")["rig"] not in ("triaxial", "biaxial"):
+            raise ConfigError(config_file, f"loop.targets[{k}]", f"{target!r} is a box test; allowed: "
+                              "triaxial or biaxial tests (the effects act on the biaxial rig)")
+
+
+def _points(args, cfg):
+    """[(N, values)] of every target within the simulated cycles, checked like calibrate's."""
+    from ..calibration.cli import check_rig, measured_points, specimens_kind
+    lp = cfg["loop"]
+    if len(args.specimens) != lp["cases"]:
+        raise ConfigError(args.config, "loop.cases", f"{lp['cases']} but {len(args.specimens)} "
+                          "specimens given; allowed: one specimen per case")
+    if len(args.conditions) != len(args.measured):
+        raise ConfigError(args.config, "loop.targets", f"{len(args.measured)} measured files but "
+                          f"{len(args.conditions)} conditions YAMLs; allowed: one of each per target")
+    for c in args.conditions:
+        input_file(c, "expected the test's conditions YAML")
+    measured = [measured_points(m, args.config, lp, "loop") for m in args.measured]
+    kind = specimens_kind(args.specimens)
+    for m in args.measured:
+        check_rig(m, args.config, lp, kind, "loop")
+    if kind != "biaxial":
+        raise ConfigError(args.specimens[0], "rig_kind", f"{kind}; allowed: biaxial specimens (the "
+                          "effects act on the cyclic biaxial test)")
+    return measured
+
+
+def _evaluate_candidates(make, names, y, point_test, lp, seed):
+    """{effect: (thetas, [(K, P)] per set, HeldOut, (mean, interval, ess), Evaluator)}."""
+    from ..calibration.bayes import initial_design
+    from ..config import job_seed
+    from .effects import EFFECTS
+    from .select import fit_all, held_out_candidate
+    out = {}
+    for name in names:
+        eff = EFFECTS[name]
+        lower = np.array([p.low for p in eff.parameters])
+        upper = np.array([p.high for p in eff.parameters])
+        thetas = initial_design(lower, upper, lp["design_sets"], job_seed(seed, f"loop/{name}"))
+        evaluate = make([p.name for p in eff.parameters], name)
+        at = evaluate(thetas)
+        args = (thetas, at, y, point_test, lower, upper, lp["measurement_sd"] ** 2, lp["posterior_samples"], seed)
+        out[name] = (thetas, at, held_out_candidate(*args), fit_all(*args), evaluate)
+    return out
+
+
+def _loop(args):
+    from ..calibration.parameters import load_calibrated
+    from ..measured.importer import load_conditions
+    from ..provenance import Recorder
+    from .effects import EFFECTS
+    from .report import write_outputs
+    from .select import choose, held_out_plain
+    cfg = load_config(args.config)
+    lp = cfg["loop"]
+    out = writable_dir(args.out_dir)
+    measured = _points(args, cfg)
+    base = load_calibrated(args.parameters) if args.parameters else {}
+    y = np.concatenate([v for _, v in measured])
+    point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
+    recorder = Recorder("loop", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
+                                        *([args.parameters] if args.parameters else [])),
+                        params={"loop": lp, "base": base}, seed=cfg["seed"])
+    t0 = time.time()
+
+    def make(names, effect=None):
+        from ..calibration.runner import Evaluator
+        return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
+                         args.config, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
+                         progress=not args.quiet, effect=effect, base=base)
+
+    plain_eval = make([])
+    plain_at = plain_eval(np.zeros((1, 0)))[0]
+    meas_var = lp["measurement_sd"] ** 2
+    plain = held_out_plain(plain_at, y, point_test, meas_var)
+    conditions = [load_conditions(c) for c in args.conditions]
+    untestable = [e for e in lp["effects"] if not EFFECTS[e].testable(conditions)]
+    candidates = _evaluate_candidates(make, [e for e in lp["effects"] if e not in untestable],
+                                      y, point_test, lp, cfg["seed"])
+    chosen, evidence = choose({k: v[2] for k, v in candidates.items()}, plain)
+    after = None
+    if chosen:
+        mean = candidates[chosen][3][0]
+        candidates[chosen][4](mean[None])           # the chosen effect at its fitted value
+        after = candidates[chosen][4].sets[-1]
+    files = write_outputs(out, args, lp, measured, plain_eval.sets[0], plain, candidates, evidence,
+                          chosen, after, base, untestable, minutes=(time.time() - t0) / 60)
+    recorder.finish()
+    cases = sorted(p for p in (out / "cases").rglob("*.nc"))
+    recorder.write_beside(files[0], also=files[1:] + cases)
+    if not args.quiet:
+        print(f"wrote {out}: effect chosen: {chosen or 'none'}")
+
+
+def register(subparsers):
+    c = subparsers.add_parser("loop", help="residuals, candidate effects on held-out tests, the "
+                              "long-term horizon (issue 14)")
+    c.add_argument("measured", nargs="+", type=Path, help="the tests' netCDFs (measured import)")
+    c.add_argument("--conditions", required=True, nargs="+", type=Path,
+                   help="their conditions YAMLs, in the same order")
+    c.add_argument("--specimens", required=True, nargs="+", type=Path,
+                   help="K assembled biaxial specimens (case assemble --rig biaxial)")
+    c.add_argument("--parameters", type=Path, help="a calibrated.yaml: the plain model's material "
+                   "parameters (default Table 4.2's)")
+    c.add_argument("--out-dir", required=True, type=Path)
+    c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
+    c.add_argument("--config", default="config/config.yaml", type=Path)
+    c.add_argument("--quiet", action="store_true")
+    c.set_defaults(func=_loop)
+    return c
