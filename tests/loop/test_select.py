@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from ballaststudy.calibration.bayes import initial_design
-from ballaststudy.loop.select import choose, fit_all, held_out_candidate, held_out_plain
+from ballaststudy.loop.select import (choose, fit_all, held_out_candidate, held_out_plain,
+                                      residual_covariances)
 
 TESTS = 7
 FREQ = np.array([5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0])     # a declared covariate per test
@@ -44,13 +45,15 @@ def _loop(truth, seed):
     rng = np.random.default_rng(seed)
     n, point_test = _points(rng)
     measured = _specimens(rng, n, point_test, truth, 0.6, 1)[0] + rng.normal(0, MEAS_SD, len(n))
-    plain = held_out_plain(_specimens(rng, n, point_test, None, 0.0, K), measured, point_test, MEAS_SD ** 2)
+    plain_curves = _specimens(rng, n, point_test, None, 0.0, K)
+    thetas = initial_design([0.0], [1.0], SETS, seed=seed + 1)
+    runs = {name: [_specimens(rng, n, point_test, name, th[0], K) for th in thetas] for name in EFFECTS}
+    covs = residual_covariances([plain_curves] + [c for r in runs.values() for c in r], point_test, MEAS_SD ** 2)
+    plain = held_out_plain(plain_curves, measured, point_test, covs)
     held, fits = {}, {}
-    for name in EFFECTS:
-        thetas = initial_design([0.0], [1.0], SETS, seed=seed + 1)
-        curves = [_specimens(rng, n, point_test, name, th[0], K) for th in thetas]
-        held[name] = held_out_candidate(thetas, curves, measured, point_test, [0.0], [1.0], MEAS_SD ** 2)
-        fits[name] = fit_all(thetas, curves, measured, point_test, [0.0], [1.0], MEAS_SD ** 2)
+    for name, curves in runs.items():
+        held[name] = held_out_candidate(thetas, curves, measured, point_test, [0.0], [1.0], covs)
+        fits[name] = fit_all(thetas, curves, measured, point_test, [0.0], [1.0], covs)
     chosen, evidence = choose(held, plain)
     return chosen, evidence, held, plain, measured, point_test, fits
 

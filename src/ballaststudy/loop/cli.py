@@ -63,23 +63,37 @@ def _points(args, cfg):
     return measured
 
 
-def _evaluate_candidates(make, names, y, point_test, lp, seed):
-    """{effect: (thetas, [(K, P)] per set, HeldOut, (mean, interval, ess), Evaluator)}."""
+def _run_candidates(make, names, lp, seed):
+    """{effect: (thetas (J, d), [(K, P)] per set, Evaluator)}: every design set under every test."""
     from ..calibration.bayes import initial_design
     from ..config import job_seed
     from .effects import EFFECTS
-    from .select import fit_all, held_out_candidate
     out = {}
     for name in names:
         eff = EFFECTS[name]
-        lower = np.array([p.low for p in eff.parameters])
-        upper = np.array([p.high for p in eff.parameters])
-        thetas = initial_design(lower, upper, lp["design_sets"], job_seed(seed, f"loop/{name}"))
+        thetas = initial_design(*_bounds(name), lp["design_sets"], job_seed(seed, f"loop/{name}"))
         evaluate = make([p.name for p in eff.parameters], name)
-        at = evaluate(thetas)
-        args = (thetas, at, y, point_test, lower, upper, lp["measurement_sd"] ** 2, lp["posterior_samples"], seed)
-        out[name] = (thetas, at, held_out_candidate(*args), fit_all(*args), evaluate)
+        out[name] = (thetas, evaluate(thetas), evaluate)
     return out
+
+
+def _bounds(name):
+    from .effects import EFFECTS
+    ps = EFFECTS[name].parameters
+    return np.array([p.low for p in ps]), np.array([p.high for p in ps])
+
+
+def _judge(runs, plain_at, y, point_test, lp, seed):
+    """(plain HeldOut, {effect: (thetas, at, HeldOut, fit_all, Evaluator)}) with one noise
+    model: the case covariance pooled over every ensemble run (select.py)."""
+    from .select import fit_all, held_out_candidate, held_out_plain, residual_covariances
+    covs = residual_covariances([plain_at] + [a for _, at, _ in runs.values() for a in at], point_test,
+                                lp["measurement_sd"] ** 2)
+    out = {}
+    for name, (thetas, at, evaluate) in runs.items():
+        args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
+        out[name] = (thetas, at, held_out_candidate(*args), fit_all(*args), evaluate)
+    return held_out_plain(plain_at, y, point_test, covs), out
 
 
 def _loop(args):
@@ -88,7 +102,7 @@ def _loop(args):
     from ..provenance import Recorder
     from .effects import EFFECTS
     from .report import write_outputs
-    from .select import choose, held_out_plain
+    from .select import choose
     cfg = load_config(args.config)
     lp = cfg["loop"]
     out = writable_dir(args.out_dir)
@@ -109,12 +123,10 @@ def _loop(args):
 
     plain_eval = make([])
     plain_at = plain_eval(np.zeros((1, 0)))[0]
-    meas_var = lp["measurement_sd"] ** 2
-    plain = held_out_plain(plain_at, y, point_test, meas_var)
     conditions = [load_conditions(c) for c in args.conditions]
     untestable = [e for e in lp["effects"] if not EFFECTS[e].testable(conditions)]
-    candidates = _evaluate_candidates(make, [e for e in lp["effects"] if e not in untestable],
-                                      y, point_test, lp, cfg["seed"])
+    runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
+    plain, candidates = _judge(runs, plain_at, y, point_test, lp, cfg["seed"])
     chosen, evidence = choose({k: v[2] for k, v in candidates.items()}, plain)
     after = None
     if chosen:

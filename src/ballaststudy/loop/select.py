@@ -8,7 +8,9 @@ tests' measured points, carried over theta by a Gaussian-process surrogate
 Likelihood of one test's points: multivariate normal around the surrogate mean with the
 covariance of one more specimen, (1 + 1/K) times the case-to-case covariance of that
 test's points pooled over the sets, plus the measurement variance and the surrogate's own
-variance on the diagonal. The points of a curve are correlated (a specimen is softer or
+variance on the diagonal. The caller pools over every ensemble it ran - the plain model's
+and all candidates' sets (residual_covariances): the specimens scatter alike whatever the
+parameters, and plain model and candidates are then judged with the same noise. The points of a curve are correlated (a specimen is softer or
 stiffer all along): independent points would count one specimen's offset many times over.
 The pooled covariance is shrunk towards its diagonal (SHRINK) so that it stays positive
 definite with few cases.
@@ -90,23 +92,22 @@ class HeldOut:
         return float(np.sqrt(np.mean((np.asarray(y)[sel] - self.predicted[sel]) ** 2)))
 
 
-def _sampled(thetas, curves_list, y, point_test, lower, upper, measurement_var, n_samples, seed):
+def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed):
     """(prior samples (M, d), surrogate means (M, P), log-likelihood per test (M, T))."""
     lower, upper = _box(lower, upper)
     surrogate = Surrogate(lower, upper, seed).fit(thetas, [c.mean(axis=0) for c in curves_list])
     exponent = max(int(np.ceil(np.log2(n_samples))), 0)
     samples = _from_unit(qmc.Sobol(len(lower), rng=seed).random_base2(exponent), lower, upper)
     mean, sd = surrogate.predict(samples)
-    covs = residual_covariances(curves_list, point_test, measurement_var)
     return samples, mean, per_test_loglik(mean, sd, np.asarray(y, float), point_test, covs)
 
 
-def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, measurement_var,
-                       n_samples=4096, seed=0):
-    """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P))."""
+def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
+    """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P));
+    covs: residual_covariances of every ensemble run."""
     y, point_test = np.asarray(y, float), np.asarray(point_test)
     samples, mean, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper,
-                                     measurement_var, n_samples, seed)
+                                     covs, n_samples, seed)
     tests = np.unique(point_test)
     lpd, predicted, theta_mean = np.empty(len(tests)), np.empty(len(y)), np.empty((len(tests), samples.shape[1]))
     for j, t in enumerate(tests):
@@ -120,22 +121,21 @@ def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, measure
     return HeldOut(lpd, predicted, theta_mean)
 
 
-def fit_all(thetas, curves_list, y, point_test, lower, upper, measurement_var, n_samples=4096, seed=0):
+def fit_all(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
     """The candidate's parameter(s) from every test: posterior mean, 90 % interval (d, 2),
     effective sample size, with the same likelihood as the held-out densities."""
     samples, _, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper,
-                                  measurement_var, n_samples, seed)
+                                  covs, n_samples, seed)
     log_w = loglik.sum(axis=1)
     w = np.exp(log_w - logsumexp(log_w))
     interval = np.array([weighted_quantile(s, w, [0.05, 0.95]) for s in samples.T])
     return w @ samples, interval, float(1.0 / np.sum(w ** 2))
 
 
-def held_out_plain(curves, y, point_test, measurement_var):
+def held_out_plain(curves, y, point_test, covs):
     """HeldOut of the plain model: its ensemble (K, P) as it is (nothing fitted, so the
     held-out density is the density)."""
     curves = np.asarray(curves, float)
-    covs = residual_covariances([curves], point_test, measurement_var)
     mean = curves.mean(axis=0)
     loglik = per_test_loglik(mean[None], np.zeros((1, len(mean))), np.asarray(y, float), point_test, covs)
     return HeldOut(loglik[0], mean, np.zeros((loglik.shape[1], 0)))

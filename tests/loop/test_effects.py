@@ -1,0 +1,221 @@
+"""The loop's effects (loop.effects) on a small assembled biaxial specimen: each switches on
+exactly the mechanism its docstring names and nothing else, so a fitted effect strength
+means what the report says it means.
+
+fouling        stone-stone friction times (1 - loss VCI / 100), walls untouched; no VCI: no change
+end_restraint  stone-platen friction = the value, stone-stone and membrane untouched
+rate           real-time mode, no local damping, the stone dashpot; a cycle lasts 1/f in
+               simulated time (20 and 40 Hz: ratio 2)
+abrasion       the strong network (normal force above the stone-stone mean) recomputed here;
+               its balls' joints, and only those, lose the share per call; over the
+               runner's cycles once per cycle, and a run resumed from its checkpoint
+               re-attaches the hook (same curve and same final joint strengths as an
+               uninterrupted one, where a resume without the hook differs)
+check          a value out of bounds or a missing / extra name is a ValueError naming the effect
+Tolerances are tight (1e-12 relative, 10 % on the cycle duration): a sign or a factor of
+two in any formula fails them."""
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+import ballaststudy.loop.effects as effects
+from ballaststudy.calibration.parameters import apply_parameters
+from ballaststudy.calibration.runner import Evaluator, run_case
+from ballaststudy.config import load_config
+from ballaststudy.inputs import open_netcdf
+from ballaststudy.loop.effects import EFFECTS, hooks, switch_on
+from ballaststudy.loop.effects.abrasion import strong_balls, wear
+from ballaststudy.measured.importer import load_conditions
+from ballaststudy.rig.biaxial import MEMBRANE, PLATEN, BiaxialParams, BiaxialRig, BiaxialRun
+
+ROOT = Path(__file__).resolve().parents[2]
+STONES = (0, 1)
+MU, BETA = "mu", "beta_n"
+
+
+def _conditions(folder, name="t", frequency_Hz=20.0, **extra):
+    """A planted triaxial test's conditions YAML (p 30, q 10-50 kPa); its path."""
+    path = Path(folder) / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(dict(
+        source="planted", rig="triaxial", confining_pressure_kPa=30.0, deviator_min_kPa=10.0,
+        deviator_max_kPa=50.0, frequency_Hz=frequency_Hz, curves=[dict(
+            file="a.dat", quantity="axial_strain", units="1", sign="compression_positive")],
+        **extra)))
+    return path
+
+
+@pytest.fixture(scope="module")
+def setup(small_library, tmp_path_factory):
+    """(assembled specimen, config, folder): the shipped config with 1000-step windows."""
+    from ballaststudy.cli import main
+    folder = tmp_path_factory.mktemp("effects")
+    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
+    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
+    config = folder / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    asm = folder / "assembled.nc"
+    assert main(["case", "assemble", str(small_library), "--case", "0", "--rig", "biaxial",
+                 "--width-m", "0.12", "--height-m", "0.24", "--config", str(config),
+                 "--out", str(asm), "--quiet"]) == 0
+    return asm, config, folder
+
+
+def _rig(setup, conditions):
+    """A fresh load of the specimen with the config's rig parameters and the conditions."""
+    asm, config, _ = setup
+    rig = BiaxialRig.from_dataset(open_netcdf(asm, "assembled"), "engine_checkpoint")
+    rig.params = BiaxialParams.from_config(load_config(config)["rig"])
+    rig.params.take_conditions(conditions)
+    return rig
+
+
+@pytest.mark.parametrize("vci", [25.0, None])
+def test_fouling_scales_stone_stone_friction_by_vci(setup, vci):
+    extra = {"covariates": {"VCI": {"value": vci, "units": "%"}}} if vci is not None else {}
+    cond = load_conditions(_conditions(setup[2], f"fouling{vci}", **extra))
+    rig = _rig(setup, cond)
+    mu0 = rig.sim.contact_coefficient(MU)
+    switch_on("fouling", rig, {"friction_loss": 0.4}, cond)
+    mu = rig.sim.contact_coefficient(MU)
+    expected = mu0.copy()
+    expected[:2, :2] *= 1.0 - 0.4 * (vci or 0.0) / 100.0      # 0.9 at VCI 25 %
+    assert mu0[0, 0] > 0
+    np.testing.assert_allclose(mu, expected, rtol=1e-12, atol=0)
+    for a in STONES:                                          # walls exactly as they were
+        assert mu[a, PLATEN] == mu0[a, PLATEN] and mu[a, MEMBRANE] == mu0[a, MEMBRANE]
+    if vci is None:
+        assert np.array_equal(mu, mu0)
+
+
+def test_end_restraint_sets_stone_platen_friction_only(setup):
+    cond = load_conditions(_conditions(setup[2]))
+    rig = _rig(setup, cond)
+    mu0 = rig.sim.contact_coefficient(MU)
+    assert not np.any(mu0[:2, PLATEN] == 0.25)
+    switch_on("end_restraint", rig, {"platen_friction": 0.25}, cond)
+    mu = rig.sim.contact_coefficient(MU)
+    expected = mu0.copy()
+    expected[:2, PLATEN] = expected[PLATEN, :2] = 0.25
+    assert np.array_equal(mu, expected)
+
+
+def test_rate_real_time_undamped_with_dashpot_and_cycles_last_one_period(setup):
+    durations = {}
+    for f in (20.0, 40.0):
+        cond = load_conditions(_conditions(setup[2], f"rate{f:g}", frequency_Hz=f))
+        rig = _rig(setup, cond)
+        beta0 = rig.sim.contact_coefficient(BETA)
+        switch_on("rate", rig, {"contact_damping_ratio": 0.3}, cond)
+        assert rig.params.mode == "real_time" and rig.params.frequency_Hz == f
+        assert np.all(rig.sim.balls.damp == 0.0)
+        beta = rig.sim.contact_coefficient(BETA)
+        stone = np.zeros(beta.shape, bool)
+        stone[:2, :] = stone[:, :2] = True
+        assert np.all(beta[stone] == 0.3) and np.array_equal(beta[~stone], beta0[~stone])
+        run = BiaxialRun(rig, 3)
+        ends = []
+        run.hooks.append(lambda r, k: ends.append((k, r.rig.sim.time)))
+        run.run()
+        assert not run.s.failure and [k for k, _ in ends] == [0, 1, 2]
+        durations[f] = np.diff([t for _, t in ends])
+        print(f"rate {f:g} Hz: cycle durations {durations[f]} s")
+        np.testing.assert_allclose(durations[f], 1.0 / f, rtol=0.1)
+    assert durations[20.0].mean() / durations[40.0].mean() == pytest.approx(2.0, rel=0.1)
+
+
+def test_abrasion_wears_the_strong_network_joints_only(setup):
+    cond = load_conditions(_conditions(setup[2]))
+    rig = _rig(setup, cond)
+    BiaxialRun(rig, 1).run()                    # quasi-static: the stones carry forces
+    i, j, fn = rig.ball_contacts()
+    n, stone = rig.layout.n_stone_balls, rig.sim.balls.stone
+    between = (i < n) & (j < n) & (stone[i] != stone[j])
+    above = between & (fn > fn[between].mean())
+    strong = set(i[above].tolist()) | set(j[above].tolist())
+    assert strong and set(strong_balls(rig).tolist()) == strong
+    bd = rig.sim.bonds
+    touched = np.array([a in strong or b in strong for a, b in zip(bd.i, bd.j)])
+    assert touched.any() and not touched.all()
+    sigc0, coh0 = bd.sigc.copy(), bd.coh.copy()
+    hit = wear(rig, 0.1)
+    assert np.array_equal(np.sort(hit), np.nonzero(touched)[0])
+    for calls in (1, 3):                        # no run between: the same balls each time
+        for now, before in ((bd.sigc, sigc0), (bd.coh, coh0)):
+            np.testing.assert_allclose(now[touched], 0.9 ** calls * before[touched],
+                                       rtol=1e-12, atol=0)
+            assert np.array_equal(now[~touched], before[~touched])
+        for _ in range(2):
+            wear(rig, 0.1)
+    print(f"abrasion: {len(strong)} strong balls of {n}, {touched.sum()} of {len(bd.i)} joints worn")
+
+
+def test_abrasion_over_cycles_and_resumed_through_the_runner(setup, monkeypatch):
+    asm, config, folder = setup
+    cond_path = _conditions(folder, "abrasion")
+    base = {"F_str_co": 1.0}        # weaker joints: the wear breaks some, the curve feels it
+    ev = Evaluator(["wear_per_cycle"], [asm], [(cond_path, [1.0, 2.0, 3.0])], config, 3,
+                   "axial_strain", folder / "ev", effect="abrasion", base=base)
+    _, per_test = ev.jobs_for({"wear_per_cycle": 0.05})
+    job = per_test[0][0]
+    assert set(job) == {"specimen", "values", "cycles", "rig", "effect", "effect_values",
+                        "metrics", "conditions", "out"}
+    assert job["effect"] == "abrasion" and job["values"] == base and job["cycles"] == 3
+
+    records, real_hooks = [], effects.hooks             # joint strengths at every cycle end
+    monkeypatch.setattr(effects, "hooks", lambda name, values: real_hooks(name, values) + [
+        lambda run, cycle: records.append((cycle, run.rig.sim.bonds.sigc.copy(),
+                                           run.rig.sim.intact_bonds()))])
+    full = run_case(job)
+    full_records, records[:] = list(records), []
+
+    out2 = folder / "resumed" / "case0.nc"
+    out2.parent.mkdir()
+    ckpt = out2.with_name(out2.stem + ".checkpoint.npz")
+    rig = BiaxialRig.from_dataset(open_netcdf(asm, "assembled"), "engine_checkpoint")
+    rig.params = BiaxialParams(**job["rig"])
+    apply_parameters(rig, job["values"])
+    sigc0 = rig.sim.bonds.sigc.copy()
+    switch_on("abrasion", rig, job["effect_values"], load_conditions(job["conditions"]))
+    run = BiaxialRun(rig, 3, checkpoint=ckpt, checkpoint_every=1, metrics=job["metrics"])
+    run.hooks += real_hooks("abrasion", job["effect_values"])
+    run.run(stop_after=1)
+    assert run.s.cycle == 1 and ckpt.is_file()
+    spare = folder / "spare.checkpoint.npz"
+    shutil.copy(ckpt, spare)
+    resumed = run_case(dict(job, out=str(out2)))
+    assert [c for c, *_ in full_records] == [0, 1, 2] and [c for c, *_ in records] == [1, 2]
+
+    strain = [open_netcdf(p, "metrics")["axial_strain"].values for p in (full, resumed)]
+    assert np.array_equal(strain[0], strain[1])
+    assert np.array_equal(full_records[-1][1], records[-1][1])
+    unhooked = BiaxialRun.from_checkpoint(spare, cycles=3).run()    # the resume without hooks
+    other = np.array([r["axial_strain"] for r in unhooked.s.rows])
+    assert not np.array_equal(other, strain[0]), "the curve cannot tell a lost hook"
+
+    for cycle, sigc, intact in full_records:            # at most one wear per cycle
+        ratio = sigc[intact] / sigc0[intact]
+        assert ratio.min() < 1.0 and ratio.min() >= 0.95 ** (cycle + 1) - 1e-12
+        assert ratio.max() <= 1.0 + 1e-12
+    print(f"abrasion runner: strains {strain[0]}, without the hook on resume {other}; "
+          f"min strength ratio per cycle {[float((s[m] / sigc0[m]).min()) for _, s, m in full_records]}, "
+          f"joints worn at the end {int(np.sum(full_records[-1][1] < sigc0))} of {len(sigc0)}")
+
+
+@pytest.mark.parametrize("name", sorted(EFFECTS))
+def test_check_rejects_bad_values_naming_the_effect(name):
+    effect = EFFECTS[name]
+    (p,) = effect.parameters
+    effect.check({p.name: p.low})
+    effect.check({p.name: p.high})
+    mid = 0.5 * (p.low + p.high)
+    for bad in ({p.name: p.low - 0.01}, {p.name: p.high + 0.01}, {p.name: -p.high}, {},
+                {p.name: mid, "extra": mid}, {"other": mid}):
+        with pytest.raises(ValueError, match=f"effect {name}"):
+            effect.check(bad)
+        with pytest.raises(ValueError, match=f"effect {name}"):
+            switch_on(name, None, bad, {})          # checked before the rig is touched
+    assert len(hooks(name, {p.name: mid})) == (name == "abrasion")
