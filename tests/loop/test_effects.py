@@ -219,3 +219,10 @@ def test_check_rejects_bad_values_naming_the_effect(name):
         with pytest.raises(ValueError, match=f"effect {name}"):
             switch_on(name, None, bad, {})          # checked before the rig is touched
     assert len(hooks(name, {p.name: mid})) == (name == "abrasion")
+
+
+@pytest.mark.parametrize("cov", [{"value": 150.0, "units": "%"}, {"value": 0.5, "units": "1"}])
+def test_fouling_refuses_a_vci_it_cannot_read(cov):
+    from ballaststudy.loop.effects import covariate
+    with pytest.raises(ValueError, match="covariate VCI"):
+        covariate({"covariates": {"VCI": cov}}, "VCI")

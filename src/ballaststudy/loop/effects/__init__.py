@@ -54,11 +54,22 @@ class Effect:
                                  f"[{p.low:g}, {p.high:g}]")
 
 
+# covariates an effect reads: (units, lowest, highest)
+COVARIATES = {"VCI": ("%", 0.0, 100.0)}
+
+
 def covariate(conditions, name, absent=0.0):
     """A declared covariate's value from a test's conditions (load_conditions), ``absent``
-    if the test does not declare it."""
+    if the test does not declare it; ValueError if its units or range are not the ones
+    the effects assume (VCI: % of the void volume, 0-100)."""
     cov = (conditions.get("covariates") or {}).get(name)
-    return float(cov["value"]) if cov else float(absent)
+    if not cov:
+        return float(absent)
+    units, low, high = COVARIATES[name]
+    if cov.get("units") != units or not low <= float(cov["value"]) <= high:
+        raise ValueError(f"covariate {name} = {cov['value']} {cov.get('units')}: the effects read it "
+                         f"in {units}, {low:g}-{high:g}")
+    return float(cov["value"])
 
 
 def _registry():
@@ -79,4 +90,5 @@ def switch_on(name, rig, values, conditions):
 def hooks(name, values):
     """The end-of-cycle hooks effect ``name`` needs (attach them again on resume)."""
     effect = EFFECTS[name]
+    effect.check(values)
     return [effect.hook(values)] if effect.hook else []

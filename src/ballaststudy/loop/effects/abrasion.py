@@ -46,5 +46,5 @@ def configure(rig, values, conditions):
 EFFECT = Effect(
     "abrasion", "flat joints of stone balls in the strong force network lose a share of their "
     "strength every cycle",
-    (EffectParameter("wear_per_cycle", "share of a loaded joint's strength lost per cycle", "1", 0.0, 0.05),),
+    (EffectParameter("wear_per_cycle", "share of a loaded joint's strength lost per cycle", "1", 0.0, 0.2),),
     configure, hook)
