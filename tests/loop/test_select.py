@@ -73,3 +73,18 @@ def test_the_planted_effect_is_named_and_halves_the_held_out_error(truth):
 def test_no_effect_planted_none_chosen(seed):
     chosen, evidence, *_ = _loop(None, seed)
     assert chosen is None, evidence
+
+
+def test_an_effect_that_changes_nothing_is_not_chosen():
+    """Its runs are the plain model's: every held-out gain is round-off, none may count."""
+    rng = np.random.default_rng(2)
+    n, point_test = _points(rng)
+    plain_curves = _specimens(rng, n, point_test, None, 0.0, K)
+    measured = _specimens(rng, n, point_test, None, 0.0, 1)[0]
+    thetas = initial_design([0.0], [1.0], SETS, seed=3)
+    runs = [plain_curves + 1e-15 * th[0] for th in thetas]
+    covs = residual_covariances([plain_curves] + runs, point_test, MEAS_SD ** 2)
+    plain = held_out_plain(plain_curves, measured, point_test, covs)
+    held = held_out_candidate(thetas, runs, measured, point_test, [0.0], [1.0], covs)
+    chosen, evidence = choose({"nothing": held}, plain)
+    assert chosen is None and evidence["nothing"]["wins"] == 0 and evidence["nothing"]["p"] == 1.0

@@ -52,7 +52,11 @@ def long_term(args, lp, curves):
         ds = open_netcdf(path, "measured")
         n, v = ds["cycle"].values, ds[lp["quantity"]].values
         beyond = np.isfinite(v) & (n > lp["cycles"])
-        fit = fit_ensemble("sato", cycles, curves[j])
+        try:
+            fit = fit_ensemble("sato", cycles, curves[j])
+        except (RuntimeError, ValueError):     # no convergence (a flat, censored ensemble)
+            out.append((n[beyond], v[beyond], np.full(beyond.sum(), np.nan), None))
+            continue
         out.append((n[beyond], v[beyond], predict(fit, n[beyond])[0], fit))
     return out
 
@@ -207,8 +211,8 @@ def _long_term_lines(horizon, scale, unit, names):
     for j, (n, v, pred, fit) in enumerate(horizon["before"]):
         after = horizon["after"][j][2] if horizon["after"] else None
         a = f"{scale * _rmse(v, after):.3g}" if after is not None else "-"
-        g, al, b = fit.params[1:]
-        lines.append(f"| {names[j]} | {n.size} | {scale * _rmse(v, pred):.3g} | {a} | {g:.3g}, {al:.3g}, {b:.3g} |")
+        law = "no fit (did not converge)" if fit is None else ", ".join(f"{x:.3g}" for x in fit.params[1:])
+        lines.append(f"| {names[j]} | {n.size} | {scale * _rmse(v, pred):.3g} | {a} | {law} |")
     return lines + [""]
 
 
@@ -233,7 +237,8 @@ def plot_curves(path, lp, measured, plain_set, after, horizon, names):
             c = scale * ens["curves"][j]
             ax.plot(cycles, c.mean(axis=0), color=colour, lw=2, label=label)
             ax.fill_between(cycles, c.min(axis=0), c.max(axis=0), color=colour, alpha=0.2)
-            ax.plot(far, scale * predict(lt[j][3], far)[0], color=colour, ls="--", lw=1)
+            if lt[j][3] is not None:
+                ax.plot(far, scale * predict(lt[j][3], far)[0], color=colour, ls="--", lw=1)
         n, v = measured[j]
         ax.plot(n, scale * v, "ko", ms=3, label="measured (DEM horizon)")
         ax.plot(horizon["before"][j][0], scale * horizon["before"][j][1], "o", mfc="none", mec="k", ms=3,

@@ -20,8 +20,8 @@ Leave one condition out: for each test t, the posterior of theta from the other 
 predictive density lpd_t = log sum_s w_s p(y_t | theta_s), and the held-out prediction
 (the weighted mean curve).
 
-Rule: a candidate passes if its per-test gains g_t = lpd_t - lpd_t,plain are positive more
-consistently than chance - a one-sided Wilcoxon signed-rank test, p < ALPHA / (number of
+Rule: a candidate passes if its per-test gains g_t = lpd_t - lpd_t,plain (|g_t| < GAIN_TIE
+a tie) are positive more consistently than chance - a one-sided Wilcoxon signed-rank test, p < ALPHA / (number of
 candidates) (Bonferroni over the candidates tried) - and the candidate with the largest
 summed gain among those passing is chosen; if none passes, none is. Why not "summed gain
 > 2 standard errors" (SE = sqrt(T var(g)), Vehtari, Gelman & Gabry 2017, reported too): an
@@ -40,6 +40,10 @@ from ..calibration.bayes import Surrogate, _box, _from_unit, weighted_quantile
 
 SHRINK = 0.1          # weight of the diagonal in the shrunk case covariance
 ALPHA = 0.05          # family-wise level of the rule over the candidates
+# a per-test gain below half a nat (a Bayes factor under 1.65, "not worth more than a bare
+# mention" on Jeffreys' scale) is a tie: an effect that changes nothing must not win on
+# round-off (its runs equal the plain model's and every gain is ~1e-13)
+GAIN_TIE = 0.5
 
 
 def pooled_covariance(curves_list, point_test, test):
@@ -148,9 +152,10 @@ def choose(candidates, plain):
         diff = held.lpd - plain.lpd
         se = float(np.sqrt(len(diff) * np.var(diff, ddof=1))) if len(diff) > 1 else np.inf
         gain = float(diff.sum())
-        p = float(wilcoxon(diff, alternative="greater").pvalue) if np.any(diff != 0) else 1.0
+        decided = diff[np.abs(diff) >= GAIN_TIE]        # ties dropped, as the signed-rank test does
+        p = float(wilcoxon(decided, alternative="greater").pvalue) if decided.size else 1.0
         evidence[name] = dict(gain=gain, se=se, z=gain / se if se > 0 else np.inf,
-                              wins=int(np.sum(diff > 0)), tests=len(diff), p=p)
+                              wins=int(np.sum(diff >= GAIN_TIE)), tests=len(diff), p=p)
     passing = {k: v for k, v in evidence.items() if v["gain"] > 0 and v["p"] < ALPHA / len(candidates)}
     chosen = max(passing, key=lambda k: passing[k]["gain"]) if passing else None
     return chosen, evidence

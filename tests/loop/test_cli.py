@@ -1,0 +1,131 @@
+"""`ballaststudy loop` end to end at tiny scale (three planted tests, one cheap candidate:
+the outputs, the two horizons apart, nothing chosen with three tests - the rule cannot pass
+with fewer than six), and bad input in one line before any case runs (CLI and Snakefile)."""
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+from ballaststudy.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _config(folder, **loop):
+    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
+    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
+    cfg["loop"].update(dict(cases=2, cycles=5, design_sets=2, effects=["end_restraint", "fouling"],
+                            measurement_sd=1e-4, posterior_samples=256), **loop)
+    path = Path(folder) / "config.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    return path
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory, small_library):
+    """(folder, config, [measured nc], [conditions], [specimens]): three planted tests,
+    their curves a log law past the simulated cycles (the long-term horizon)."""
+    from ballaststudy.measured.importer import import_test
+    d = tmp_path_factory.mktemp("loop")
+    config = _config(d)
+    specimens = [d / f"s{k}.nc" for k in range(2)]
+    for k, s in enumerate(specimens):
+        assert main(["case", "assemble", str(small_library), "--case", str(k), "--rig", "biaxial",
+                     "--width-m", "0.12", "--height-m", "0.24", "--config", str(config), "--out", str(s),
+                     "--quiet"]) == 0
+    measured, conditions = [], []
+    for j, (p, f) in enumerate([(30, 5), (30, 40), (40, 20)]):
+        conditions.append(d / f"t{j}.yaml")
+        conditions[-1].write_text(yaml.safe_dump(dict(
+            source="planted", rig="triaxial", confining_pressure_kPa=p, deviator_min_kPa=10.0,
+            deviator_max_kPa=50.0, frequency_Hz=f,
+            curves=[dict(file=f"t{j}.dat", quantity="axial_strain", units="1", sign="compression_positive")])))
+        n = np.array([1.0, 1.7, 2.5, 3.9, 4.6, 30.0, 500.0])
+        (d / f"t{j}.dat").write_text("".join(f"{a}, {0.001 + 0.0005 * np.log(a)}\n" for a in n))
+        measured.append(d / f"t{j}.nc")
+        import_test(conditions[-1], measured[-1])
+    return d, config, measured, conditions, specimens
+
+
+def _argv(tiny, out, config=None):
+    d, cfg, measured, conditions, specimens = tiny
+    return ["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens",
+            *map(str, specimens), "--out-dir", str(out), "--config", str(config or cfg), "--quiet"]
+
+
+def test_loop_end_to_end(tiny, tmp_path):
+    out = tmp_path / "loop"
+    assert main(_argv(tiny, out) + ["--jobs", "2"]) == 0
+    text = (out / "report.md").read_text()
+    assert "## DEM horizon" in text and "## Long-term horizon (extrapolated, reported apart)" in text
+    assert "| fouling | - |" in text and "not testable: no target declares VCI" in text
+    assert "**No effect chosen**" in text
+    assert yaml.safe_load((out / "chosen.yaml").read_text())["effect"] == "none"
+    with xr.open_dataset(out / "loop.nc") as ds:
+        assert ds["plain"].shape == (3, 2, 5) and ds["candidate"].shape == (1, 2, 3, 2, 5)
+        assert ds["measured"].size == 15                  # 5 points per test within N <= 5
+        assert list(ds["effect"].values) == ["end_restraint"] and ds.attrs["untestable_effects"] == "fouling"
+        assert ds["plain"].attrs["units"] == "1" and ds.attrs["Conventions"] == "CF-1.8"
+        cands = json.loads(ds.attrs["candidates_json"])
+    assert cands[0]["tests"] == 3 and 0.0 <= cands[0]["mean"][0] <= 1.2
+    assert (out / "curves.png").is_file() and (out / "report.md.prov.json").is_file()
+    cached = sorted((out / "cases").rglob("*.nc"))
+    assert len(cached) == 2 * 3 * (1 + 2)               # K x tests x (plain + 2 design sets)
+    stamp = [p.stat().st_mtime_ns for p in cached]
+    assert main(_argv(tiny, out)) == 0                   # again: every case reused
+    assert [p.stat().st_mtime_ns for p in cached] == stamp
+
+
+@pytest.mark.parametrize("change, key", [
+    (dict(cases=3), "loop.cases: 3 but 2 specimens given"),
+    (dict(cycles=2), "loop.cycles"),
+    (dict(quantity="volumetric_strain"), "the test has no volumetric_strain curve"),
+])
+def test_loop_checks_before_any_case(tiny, tmp_path, capsys, change, key):
+    config = _config(tmp_path, **change)
+    out = tmp_path / "out"
+    assert main(_argv(tiny, out, config)) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and key in line, line
+    assert not out.exists() or not any(out.rglob("*.nc"))
+
+
+def _workflow(tmp_path, change):
+    for part in ("Snakefile", "workflow", "config"):
+        src = ROOT / part
+        (shutil.copytree(src, tmp_path / part) if src.is_dir() else shutil.copy(src, tmp_path))
+    path = tmp_path / "config" / "config.yaml"
+    cfg = yaml.safe_load(path.read_text())
+    cfg["measured"]["data_dir"] = str(ROOT / cfg["measured"]["data_dir"])
+    change(cfg["loop"])
+    path.write_text(yaml.safe_dump(cfg))
+    return subprocess.run(["snakemake", "--cores", "1", "-n", "-p", "loop"], cwd=tmp_path,
+                          capture_output=True, text=True)
+
+
+def test_snakefile_plans_the_loop(tmp_path):
+    if not (ROOT / "../shared/data/measured").is_dir():
+        pytest.skip("the shared measured data are not here (the loop's tests are imported from them)")
+    out = _workflow(tmp_path, lambda c: None)
+    assert out.returncode == 0, out.stderr
+    assert "rule loop_assemble:" in out.stdout and "ballaststudy loop results/measured/" in out.stdout
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda c: c.update(targets=["sun_et_al_16/p60_q230_f5", "nobody/nothing", "sun_et_al_16/p60_q230_f10"]),
+     "loop.targets[1]: 'nobody/nothing' is not a measured test"),
+    (lambda c: c.update(targets=["sun_et_al_16/p60_q230_f5"] * 3), "loop.targets[1]: 'sun_et_al_16/p60_q230_f5' given twice"),
+    (lambda c: c.update(effects=["rate", "moisture"]), "loop.effects[1]"),
+    (lambda c: c.update(targets=["sun_et_al_16/p60_q230_f5"]), "loop.targets"),
+])
+def test_snakefile_refuses_bad_loop_config(tmp_path, change, message):
+    out = _workflow(tmp_path, change)
+    lines = [ln for ln in out.stderr.strip().splitlines() if not ln.startswith("note: ")]
+    assert out.returncode == 2 and len(lines) == 1, out.stderr
+    assert message in lines[0], lines[0]
