@@ -73,6 +73,9 @@ def test_loop_end_to_end(tiny, tmp_path):
         assert list(ds["effect"].values) == ["end_restraint"] and ds.attrs["untestable_effects"] == "fouling"
         assert ds["plain"].attrs["units"] == "1" and ds.attrs["Conventions"] == "CF-1.8"
         cands = json.loads(ds.attrs["candidates_json"])
+        tests = json.loads(ds.attrs["tests_json"])
+    assert all(np.isfinite(t["mean_coordination"]) and t["mean_coordination"] > 1 for t in tests)
+    assert "| bias | mean_coordination |" in text
     assert cands[0]["tests"] == 3 and 0.0 <= cands[0]["mean"][0] <= 1.2
     assert (out / "curves.png").is_file() and (out / "report.md.prov.json").is_file()
     cached = sorted((out / "cases").rglob("*.nc"))

@@ -18,6 +18,24 @@ from .residual import covariate_tests, residual, summary
 
 CF = "CF-1.8"
 COVARIATES = ("frequency_Hz", "confining_pressure_kPa", "deviator_max_kPa", "VCI")
+# the plain model's internal signals at its last simulated cycle (mean over the cases)
+SIGNALS = ("breakage_rate", "mean_coordination", "void_ratio", "volumetric_strain")
+
+
+def model_signals(out, key, tests, cases):
+    """[{signal: mean over the cases at the last cycle}] per test, from the plain model's
+    cached metrics.nc (cases/<key>/test<j>/case<k>.nc); a failed case's last row."""
+    from ..inputs import open_netcdf
+    rows = []
+    for j in range(tests):
+        values = {s: [] for s in SIGNALS}
+        for k in range(cases):
+            ds = open_netcdf(Path(out) / "cases" / key / f"test{j}" / f"case{k}.nc", "metrics")
+            for s in SIGNALS:
+                if s in ds and ds.sizes.get("cycle", 0):
+                    values[s].append(float(ds[s].values[-1]))
+        rows.append({s: float(np.mean(v)) if v else float("nan") for s, v in values.items()})
+    return rows
 
 
 def _rmse(a, b):
@@ -106,14 +124,16 @@ def write_outputs(out, args, lp, measured, plain_set, plain, candidates, evidenc
     y = np.concatenate([v for _, v in measured])
     point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
     before = per_test_rows(args, lp, plain_set["curves"], measured)
+    for row, sig in zip(before, model_signals(out, plain_set["key"], len(before), len(args.specimens))):
+        row.update(sig)
     after_rows = per_test_rows(args, lp, after["curves"], measured) if after is not None else None
-    cov = [r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES)]
+    cov = [r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)]
     cands = candidate_rows(candidates, evidence, plain, y, point_test, chosen)
     horizon = dict(before=long_term(args, lp, plain_set["curves"]),
                    after=long_term(args, lp, after["curves"]) if after is not None else None)
     files = [out / "report.md", out / "loop.nc", out / "chosen.yaml", out / "curves.png"]
     ds = loop_dataset(lp, measured, plain_set, candidates, after, before, y, point_test, plain)
-    ds.attrs.update(covariate_tests_json=json.dumps(cov), candidates_json=json.dumps(cands),
+    ds.attrs.update(tests_json=json.dumps(before), covariate_tests_json=json.dumps(cov), candidates_json=json.dumps(cands),
                     chosen=chosen or "none", material_parameters_json=json.dumps(base),
                     untestable_effects=", ".join(untestable) or "none")
     with atomic_path(files[1]) as tmp:
@@ -161,8 +181,10 @@ def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain, y, po
                      f"{r.get('VCI', 0):g} | {r['points']} | {scale * r['rmse']:.3g} | {a:.3g} | "
                      f"{scale * r['bias']:.3g} ({_fmt_p(r['bias_p'])}) | {scale * r['slope_ln_n']:.3g} ({_fmt_p(r['slope_p'])}) |")
     lines += ["", "## What the residual relates to (across tests)", "",
-              "Least squares of each test's bias and slope on each declared covariate, one intercept per "
-              "source study (a grouping factor), t-test p, Holm-adjusted over the covariates tried.", "",
+              "Least squares of each test's bias and slope on each declared covariate and on each of the "
+              "plain model's internal signals at its last cycle (" + ", ".join(SIGNALS) + "; mean of the "
+              "cases), one intercept per source study (a grouping factor), t-test p, Holm-adjusted over "
+              "everything tried for that response.", "",
               "| response | covariate | tests | slope | p | p (Holm) | significant |", "|---|---|---|---|---|---|---|"]
     for r in cov:
         if r["tried"]:
