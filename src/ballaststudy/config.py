@@ -29,6 +29,8 @@ ORDERED_PAIRS = (
     ("bpm", "radius_min_mm", "radius_max_mm", False),
     ("calibration.parameters.F_str_co", "min", "max", True),
     ("calibration.parameters.mu", "min", "max", True),
+    ("calibration.parameters.E_star", "min", "max", True),
+    ("calibration.parameters.kappa_star", "min", "max", True),
 )
 
 

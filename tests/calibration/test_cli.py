@@ -30,8 +30,11 @@ def _copy_workflow(tmp_path):
 
 
 @pytest.mark.parametrize("change, key, allowed", [
-    (lambda c: c["parameters"].update(E_star={"min": 1, "max": 2}), "calibration.parameters.E_star",
+    (lambda c: c["parameters"].update(mu_r={"min": 0.1, "max": 0.2}), "calibration.parameters.mu_r",
      "unknown key"),
+    (lambda c: c["parameters"].update(E_star={"min": 0, "max": 2e9}), "calibration.parameters.E_star.min", "> 0"),
+    (lambda c: c["parameters"].update(kappa_star={"min": 3.0, "max": 2.0}), "calibration.parameters.kappa_star.min",
+     "must be below calibration.parameters.kappa_star.max"),
     (lambda c: c["parameters"]["mu"].update(min=-0.1), "calibration.parameters.mu.min", ">= 0"),
     (lambda c: c["parameters"]["F_str_co"].update(min=0.0), "calibration.parameters.F_str_co.min", "> 0"),
     (lambda c: c["parameters"]["F_str_co"].update(min=6.0, max=2.0), "calibration.parameters.F_str_co.min",

@@ -38,6 +38,17 @@ def test_parameters_applied_as_named(specimen):
         assert np.all(mu[:2, wall] == mu0[:2, wall]) and np.all(mu[wall, :2] == mu0[wall, :2])
 
 
+@pytest.mark.parametrize("name, column, value", [("E_star", "E", 1.0e9), ("kappa_star", "kappa", 1.5)])
+def test_optional_contact_parameters(specimen, name, column, value):
+    """E* and kappa* set the stone-stone contact's column exactly; walls keep theirs."""
+    rig = BiaxialRig.load(specimen)
+    before = rig.sim.contact_coefficient(column)
+    assert PARAMETERS[name].table_4_2(rig) == before[0, 0]
+    apply_parameters(rig, {name: value})
+    after = rig.sim.contact_coefficient(column)
+    assert np.all(after[:2, :2] == value) and np.all(after[:2, 2:] == before[:2, 2:])
+
+
 def _metrics(path, rows, failed, failure_strain=0.15):
     ds = xr.Dataset({"axial_strain": ("cycle", np.asarray(rows, float))},
                     coords={"cycle": np.arange(len(rows))},

@@ -2,10 +2,13 @@
 an assembled specimen before its loading, so every parameter set reuses the same K
 assembled specimens (common random numbers: the sets differ by their parameters only).
 
-F_str_co  strength and cohesion scaling factor: every flat joint's tensile strength and
-          cohesion scaled by F_str_co / 3.5 (the BPM libraries are built at Table 4.2's 3.5)
-mu        friction coefficient of the linear contact between stones (hard and soft; walls
-          and platens keep the rig's)
+F_str_co    strength and cohesion scaling factor: every flat joint's tensile strength and
+            cohesion scaled by F_str_co / 3.5 (the BPM libraries are built at Table 4.2's 3.5)
+mu          friction coefficient of the linear contact between stones (hard and soft; walls
+            and platens keep the rig's)
+E_star      effective modulus E* of that contact [Pa] (optional)
+kappa_star  its normal-to-shear stiffness ratio kappa* (optional)
+(Rolling friction mu_r is not offered: the rigs' contact law has no rolling sub-model.)
 """
 import math
 from dataclasses import dataclass
@@ -25,24 +28,31 @@ class Parameter:
     highest: float
     open_low: bool = False
 
+    coefficient: str = ""      # the contact law's column it sets (none: F_str_co)
+
     def table_4_2(self, rig):
         """The value the assembled specimen has (Table 4.2's unless changed)."""
-        if self.name == "F_str_co":
+        if not self.coefficient:
             return F_STR_CO
-        return float(rig.sim.contact_coefficient("mu")[0, 0])
+        return float(rig.sim.contact_coefficient(self.coefficient)[0, 0])
 
     def apply(self, rig, value):
-        if self.name == "F_str_co":
+        if not self.coefficient:
             rig.sim.scale_bond_strength(value / F_STR_CO)
         else:
             for a in STONE_MATERIALS:
                 for b in STONE_MATERIALS:
-                    rig.sim.set_contact_coefficient("mu", value, a, b)
+                    rig.sim.set_contact_coefficient(self.coefficient, value, a, b)
 
 
 PARAMETERS = {p.name: p for p in (
     Parameter("F_str_co", "strength and cohesion scaling factor F_str-co (Table 4.2)", "1", 0.0, 1000.0, True),
-    Parameter("mu", "friction coefficient of the linear contact between stones (Table 4.2)", "1", 0.0, 10.0),
+    Parameter("mu", "friction coefficient of the linear contact between stones (Table 4.2)", "1", 0.0, 10.0,
+              coefficient="mu"),
+    Parameter("E_star", "effective modulus E* of the linear contact between stones (Table 4.2)", "Pa", 0.0,
+              1e12, True, coefficient="E"),
+    Parameter("kappa_star", "normal-to-shear stiffness ratio kappa* of that contact (Table 4.2)", "1", 0.0,
+              100.0, True, coefficient="kappa"),
 )}
 
 
