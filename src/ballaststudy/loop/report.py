@@ -98,6 +98,7 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
         "measured_cycle": ("point", np.concatenate([n for n, _ in measured]), {"units": "1", "long_name": "load cycle N of the point"}),
         "point_test": ("point", point_test.astype(np.int32), {"units": "1", "long_name": "test of the point"}),
         "plain": (("test", "case", "cycle"), plain_set["curves"], {"units": units, "long_name": "plain model: simulated " + long_name}),
+        "plain_prediction": ("point", plain.predicted, {"units": units, "long_name": "plain model: ensemble mean at the point"}),
         "plain_lpd": ("test", plain.lpd, {"units": "1", "long_name": "plain model: log predictive density of the test's points"}),
         "candidate": (("effect", "set", "test", "case", "cycle"),
                       np.array([[s["curves"] for s in c[4].sets[: len(c[0])]] for c in candidates.values()]),
