@@ -132,7 +132,7 @@ def test_case_run_takes_calibrated_parameters(small_library, tmp_path, capsys):
         assert json.loads(ds.attrs["material_parameters_json"]) == {"F_str_co": 7.0, "mu": 0.5}
     record = json.loads(out.with_name("metrics.nc.prov.json").read_text())
     assert str(good) in json.dumps(record["inputs"]) and record["params"]["material_parameters"] == {"F_str_co": 7.0, "mu": 0.5}
-    for bad, key in (({"E_star": 1.0}, "parameters.E_star: unknown parameter"),
+    for bad, key in (({"mu_r": 1.0}, "parameters.mu_r: unknown parameter"),
                      ({"F_str_co": 0.0}, "parameters.F_str_co: 0.0 is not allowed; allowed: a number > 0"),
                      ({"mu": -1}, "parameters.mu: -1 is not allowed")):
         path = tmp_path / "bad.yaml"

@@ -84,7 +84,7 @@ def test_setting_cli(tmp_path, capsys):
     out = tmp_path / "s.yaml"
     assert main(["parametric", "setting", "F_str_co", "2.5", "mu", "0.6", "--out", str(out)]) == 0
     assert yaml.safe_load(out.read_text()) == {"parameters": {"F_str_co": 2.5, "mu": 0.6}}
-    for argv, key in ((["E_star", "2"], "parameters: E_star: unknown"), (["mu"], "NAME VALUE pairs"),
+    for argv, key in ((["mu_r", "2"], "parameters: mu_r: unknown"), (["mu"], "NAME VALUE pairs"),
                       (["mu", "-1"], "parameters.mu: '-1' is not allowed")):
         assert main(["parametric", "setting", *argv, "--out", str(tmp_path / "bad.yaml")]) == 2
         line = capsys.readouterr().err.strip()

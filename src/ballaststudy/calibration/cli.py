@@ -110,6 +110,25 @@ def measured_points(path, config, cal, section="calibration"):
     return n[keep], y[keep]
 
 
+def checked_targets(args, section_cfg, section):
+    """([(N, values)] of every target within the simulated cycles, the specimens' rig kind),
+    after every check a run of K specimens under measured tests needs (calibrate, loop):
+    ConfigError naming file and key, before any case runs."""
+    if len(args.specimens) != section_cfg["cases"]:
+        raise ConfigError(args.config, f"{section}.cases", f"{section_cfg['cases']} but "
+                          f"{len(args.specimens)} specimens given; allowed: one specimen per case")
+    if len(args.conditions) != len(args.measured):
+        raise ConfigError(args.config, f"{section}.targets", f"{len(args.measured)} measured files "
+                          f"but {len(args.conditions)} conditions YAMLs; allowed: one of each per target")
+    for c in args.conditions:
+        input_file(c, "expected the test's conditions YAML")
+    measured = [measured_points(m, args.config, section_cfg, section) for m in args.measured]
+    kind = specimens_kind(args.specimens)
+    for m in args.measured:
+        check_rig(m, args.config, section_cfg, kind, section)
+    return measured, kind
+
+
 def _calibrate(args):
     from ..provenance import Recorder
     from ..rig.kinds import rig_classes
@@ -121,18 +140,7 @@ def _calibrate(args):
     out = writable_dir(args.out_dir)
     cfg = load_config(args.config)
     cal = cfg["calibration"]
-    if len(args.specimens) != cal["cases"]:
-        raise ConfigError(args.config, "calibration.cases", f"{cal['cases']} but "
-                          f"{len(args.specimens)} specimens given; allowed: one specimen per case")
-    if len(args.conditions) != len(args.measured):
-        raise ConfigError(args.config, "calibration.targets", f"{len(args.measured)} measured files "
-                          f"but {len(args.conditions)} conditions YAMLs; allowed: one of each per target")
-    for c in args.conditions:
-        input_file(c, "expected the test's conditions YAML")
-    measured = [measured_points(m, args.config, cal) for m in args.measured]
-    kind = specimens_kind(args.specimens)
-    for m in args.measured:
-        check_rig(m, args.config, cal, kind)
+    measured, kind = checked_targets(args, cal, "calibration")
     points = np.concatenate([n for n, _ in measured])
     y = np.concatenate([v for _, v in measured])
     point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
@@ -258,14 +266,18 @@ def register(subparsers):
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_parametric_report)
     c = subparsers.add_parser("calibrate", help="fit the config's parameters to a measured test (thesis 4.3)")
+    target_arguments(c, "K assembled specimens (case assemble; biaxial for triaxial tests, box for box tests)")
+    c.set_defaults(func=_calibrate)
+    return c
+
+
+def target_arguments(c, specimens_help):
+    """The arguments of a run of K specimens under measured tests (calibrate, loop)."""
     c.add_argument("measured", nargs="+", type=Path, help="the target tests' netCDFs (measured import)")
     c.add_argument("--conditions", required=True, nargs="+", type=Path,
                    help="their conditions YAMLs, in the same order")
-    c.add_argument("--specimens", required=True, nargs="+", type=Path,
-                   help="K assembled specimens (case assemble; biaxial for triaxial tests, box for box tests)")
+    c.add_argument("--specimens", required=True, nargs="+", type=Path, help=specimens_help)
     c.add_argument("--out-dir", required=True, type=Path)
     c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
     c.add_argument("--config", default="config/config.yaml", type=Path)
     c.add_argument("--quiet", action="store_true")
-    c.set_defaults(func=_calibrate)
-    return c

@@ -20,9 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..argtypes import integer
 from ..config import ConfigError, load_config
-from ..inputs import input_file, writable_dir
+from ..inputs import writable_dir
 
 
 def check_loop_targets(cfg, config_file, tests, tests_dir):
@@ -42,21 +41,10 @@ def check_loop_targets(cfg, config_file, tests, tests_dir):
 
 
 def _points(args, cfg):
-    """[(N, values)] of every target within the simulated cycles, checked like calibrate's."""
-    from ..calibration.cli import check_rig, measured_points, specimens_kind
-    lp = cfg["loop"]
-    if len(args.specimens) != lp["cases"]:
-        raise ConfigError(args.config, "loop.cases", f"{lp['cases']} but {len(args.specimens)} "
-                          "specimens given; allowed: one specimen per case")
-    if len(args.conditions) != len(args.measured):
-        raise ConfigError(args.config, "loop.targets", f"{len(args.measured)} measured files but "
-                          f"{len(args.conditions)} conditions YAMLs; allowed: one of each per target")
-    for c in args.conditions:
-        input_file(c, "expected the test's conditions YAML")
-    measured = [measured_points(m, args.config, lp, "loop") for m in args.measured]
-    kind = specimens_kind(args.specimens)
-    for m in args.measured:
-        check_rig(m, args.config, lp, kind, "loop")
+    """[(N, values)] of every target within the simulated cycles, checked like calibrate's;
+    biaxial specimens only."""
+    from ..calibration.cli import checked_targets
+    measured, kind = checked_targets(args, cfg["loop"], "loop")
     if kind != "biaxial":
         raise ConfigError(args.specimens[0], "rig_kind", f"{kind}; allowed: biaxial specimens (the "
                           "effects act on the cyclic biaxial test)")
@@ -143,18 +131,11 @@ def _loop(args):
 
 
 def register(subparsers):
+    from ..calibration.cli import target_arguments
     c = subparsers.add_parser("loop", help="residuals, candidate effects on held-out tests, the "
                               "long-term horizon (issue 14)")
-    c.add_argument("measured", nargs="+", type=Path, help="the tests' netCDFs (measured import)")
-    c.add_argument("--conditions", required=True, nargs="+", type=Path,
-                   help="their conditions YAMLs, in the same order")
-    c.add_argument("--specimens", required=True, nargs="+", type=Path,
-                   help="K assembled biaxial specimens (case assemble --rig biaxial)")
+    target_arguments(c, "K assembled biaxial specimens (case assemble --rig biaxial)")
     c.add_argument("--parameters", type=Path, help="a calibrated.yaml: the plain model's material "
                    "parameters (default Table 4.2's)")
-    c.add_argument("--out-dir", required=True, type=Path)
-    c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
-    c.add_argument("--config", default="config/config.yaml", type=Path)
-    c.add_argument("--quiet", action="store_true")
     c.set_defaults(func=_loop)
     return c
