@@ -28,7 +28,7 @@ from ballaststudy.measured.importer import import_test, load_conditions
 from ballaststudy.rig.biaxial import BiaxialParams
 
 ROOT = Path(__file__).resolve().parents[1]
-CYCLES, K, TESTS = 6, 3, 7
+CYCLES, K, TESTS = 20, 3, 7
 P, F, VCI = [30, 30, 40, 30, 40, 30, 40], [5, 10, 20, 30, 40, 50, 60], [0, 10, 20, 40, 50, 70, 80]
 BASE = {"F_str_co": 1.0}           # weak joints, so wear can break them within a few cycles
 TRUTH = {"rate": {"contact_damping_ratio": 0.3}, "abrasion": {"wear_per_cycle": 0.15},

@@ -169,9 +169,12 @@ def _message(error):
 
 
 def first_error(data, schema):
-    """(key path, message) of the first error (shallowest key first), or None."""
-    errors = sorted(StrictValidator(schema).iter_errors(data),
-                    key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
+    """(key path, message) of the first error (shallowest key first; a missing key counts
+    at its own depth, after a bad value written beside it: that is what the user typed), or None."""
+    def order(e):
+        missing = e.validator == "required"
+        return len(e.absolute_path) + missing, missing, list(map(str, e.absolute_path))
+    errors = sorted(StrictValidator(schema).iter_errors(data), key=order)
     return _message(errors[0]) if errors else None
 
 
