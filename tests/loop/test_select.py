@@ -48,13 +48,14 @@ def _loop(truth, seed):
     plain_curves = _specimens(rng, n, point_test, None, 0.0, K)
     thetas = initial_design([0.0], [1.0], SETS, seed=seed + 1)
     runs = {name: [_specimens(rng, n, point_test, name, th[0], K) for th in thetas] for name in EFFECTS}
-    covs = residual_covariances([plain_curves] + [c for r in runs.values() for c in r], point_test, MEAS_SD ** 2)
-    plain = held_out_plain(plain_curves, measured, point_test, covs)
-    held, fits = {}, {}
+    held, fits, plains = {}, {}, {}
     for name, curves in runs.items():
+        covs = residual_covariances([plain_curves] + curves, point_test, MEAS_SD ** 2)
+        plains[name] = held_out_plain(plain_curves, measured, point_test, covs)
         held[name] = held_out_candidate(thetas, curves, measured, point_test, [0.0], [1.0], covs)
         fits[name] = fit_all(thetas, curves, measured, point_test, [0.0], [1.0], covs)
-    chosen, evidence = choose(held, plain)
+    chosen, evidence = choose({k: (held[k], plains[k]) for k in runs})
+    plain = plains[next(iter(runs))]
     return chosen, evidence, held, plain, measured, point_test, fits
 
 
@@ -86,5 +87,5 @@ def test_an_effect_that_changes_nothing_is_not_chosen():
     covs = residual_covariances([plain_curves] + runs, point_test, MEAS_SD ** 2)
     plain = held_out_plain(plain_curves, measured, point_test, covs)
     held = held_out_candidate(thetas, runs, measured, point_test, [0.0], [1.0], covs)
-    chosen, evidence = choose({"nothing": held}, plain)
+    chosen, evidence = choose({"nothing": (held, plain)})
     assert chosen is None and evidence["nothing"]["wins"] == 0 and evidence["nothing"]["p"] == 1.0

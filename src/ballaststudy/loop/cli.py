@@ -72,16 +72,17 @@ def _bounds(name):
 
 
 def _judge(runs, plain_at, y, point_test, lp, seed):
-    """(plain HeldOut, {effect: (thetas, at, HeldOut, fit_all, Evaluator)}) with one noise
-    model: the case covariance pooled over every ensemble run (select.py)."""
+    """{effect: (thetas, at, HeldOut, fit_all, Evaluator, the plain model's HeldOut)}: each
+    candidate and the plain model under one noise model, the case covariance pooled over
+    the plain ensemble and the candidate's sets (select.py)."""
     from .select import fit_all, held_out_candidate, held_out_plain, residual_covariances
-    covs = residual_covariances([plain_at] + [a for _, at, _ in runs.values() for a in at], point_test,
-                                lp["measurement_sd"] ** 2)
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
+        covs = residual_covariances([plain_at] + list(at), point_test, lp["measurement_sd"] ** 2)
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
-        out[name] = (thetas, at, held_out_candidate(*args), fit_all(*args), evaluate)
-    return held_out_plain(plain_at, y, point_test, covs), out
+        out[name] = (thetas, at, held_out_candidate(*args), fit_all(*args), evaluate,
+                     held_out_plain(plain_at, y, point_test, covs))
+    return out
 
 
 def _loop(args):
@@ -114,14 +115,14 @@ def _loop(args):
     conditions = [load_conditions(c) for c in args.conditions]
     untestable = [e for e in lp["effects"] if not EFFECTS[e].testable(conditions)]
     runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
-    plain, candidates = _judge(runs, plain_at, y, point_test, lp, cfg["seed"])
-    chosen, evidence = choose({k: v[2] for k, v in candidates.items()}, plain)
+    candidates = _judge(runs, plain_at, y, point_test, lp, cfg["seed"])
+    chosen, evidence = choose({k: (v[2], v[5]) for k, v in candidates.items()})
     after = None
     if chosen:
         mean = candidates[chosen][3][0]
         candidates[chosen][4](mean[None])           # the chosen effect at its fitted value
         after = candidates[chosen][4].sets[-1]
-    files = write_outputs(out, args, lp, measured, plain_eval.sets[0], plain, candidates, evidence,
+    files = write_outputs(out, args, lp, measured, plain_eval.sets[0], plain_at.mean(axis=0), candidates, evidence,
                           chosen, after, base, untestable, minutes=(time.time() - t0) / 60)
     recorder.finish()
     cases = sorted(p for p in (out / "cases").rglob("*.nc"))

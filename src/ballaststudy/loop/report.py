@@ -79,9 +79,9 @@ def long_term(args, lp, curves):
     return out
 
 
-def candidate_rows(candidates, evidence, plain, y, point_test, chosen):
+def candidate_rows(candidates, evidence, y, point_test, chosen):
     rows = []
-    for name, (thetas, _, held, (mean, interval, ess), _) in candidates.items():
+    for name, (thetas, _, held, (mean, interval, ess), _, _) in candidates.items():
         eff = EFFECTS[name]
         rows.append(dict(effect=name, parameters=[p.name for p in eff.parameters],
                          mean=mean.tolist(), interval90=interval.tolist(), ess=ess,
@@ -90,7 +90,7 @@ def candidate_rows(candidates, evidence, plain, y, point_test, chosen):
     return rows
 
 
-def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, point_test, plain):
+def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, point_test, plain_mean):
     units, long_name, _ = VARIABLES[lp["quantity"]]
     names = list(candidates)
     data = {
@@ -98,8 +98,9 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
         "measured_cycle": ("point", np.concatenate([n for n, _ in measured]), {"units": "1", "long_name": "load cycle N of the point"}),
         "point_test": ("point", point_test.astype(np.int32), {"units": "1", "long_name": "test of the point"}),
         "plain": (("test", "case", "cycle"), plain_set["curves"], {"units": units, "long_name": "plain model: simulated " + long_name}),
-        "plain_prediction": ("point", plain.predicted, {"units": units, "long_name": "plain model: ensemble mean at the point"}),
-        "plain_lpd": ("test", plain.lpd, {"units": "1", "long_name": "plain model: log predictive density of the test's points"}),
+        "plain_prediction": ("point", plain_mean, {"units": units, "long_name": "plain model: ensemble mean at the point"}),
+        "plain_lpd": (("effect", "test"), np.array([c[5].lpd for c in candidates.values()]),
+                      {"units": "1", "long_name": "plain model: log predictive density of the test's points, under the noise model of its comparison with the effect"}),
         "candidate": (("effect", "set", "test", "case", "cycle"),
                       np.array([[s["curves"] for s in c[4].sets[: len(c[0])]] for c in candidates.values()]),
                       {"units": units, "long_name": "candidate effect at a design set: simulated " + long_name}),
@@ -120,7 +121,7 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
         attrs={"Conventions": CF, "title": "closing the loop with measured data (issue 14)"})
 
 
-def write_outputs(out, args, lp, measured, plain_set, plain, candidates, evidence, chosen, after,
+def write_outputs(out, args, lp, measured, plain_set, plain_mean, candidates, evidence, chosen, after,
                   base, untestable, minutes):
     y = np.concatenate([v for _, v in measured])
     point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
@@ -129,11 +130,11 @@ def write_outputs(out, args, lp, measured, plain_set, plain, candidates, evidenc
         row.update(sig)
     after_rows = per_test_rows(args, lp, after["curves"], measured) if after is not None else None
     cov = [r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)]
-    cands = candidate_rows(candidates, evidence, plain, y, point_test, chosen)
+    cands = candidate_rows(candidates, evidence, y, point_test, chosen)
     horizon = dict(before=long_term(args, lp, plain_set["curves"]),
                    after=long_term(args, lp, after["curves"]) if after is not None else None)
     files = [out / "report.md", out / "loop.nc", out / "chosen.yaml", out / "curves.png"]
-    ds = loop_dataset(lp, measured, plain_set, candidates, after, before, y, point_test, plain)
+    ds = loop_dataset(lp, measured, plain_set, candidates, after, before, y, point_test, plain_mean)
     ds.attrs.update(tests_json=json.dumps(before), covariate_tests_json=json.dumps(cov), candidates_json=json.dumps(cands),
                     chosen=chosen or "none", material_parameters_json=json.dumps(base),
                     untestable_effects=", ".join(untestable) or "none")
@@ -143,7 +144,7 @@ def write_outputs(out, args, lp, measured, plain_set, plain, candidates, evidenc
     with atomic_path(files[2]) as tmp:
         tmp.write_text(yaml.safe_dump(_chosen_doc(chosen, cands, base), sort_keys=False))
     plot_curves(files[3], lp, measured, plain_set, after, horizon, [r["test"] for r in before])
-    text = report_markdown(lp, before, after_rows, cov, cands, chosen, horizon, plain, y, point_test,
+    text = report_markdown(lp, before, after_rows, cov, cands, chosen, horizon, plain_mean, y, point_test,
                            dem_cases, minutes, untestable)
     with atomic_path(files[0]) as tmp:
         tmp.write_text(text)
@@ -162,7 +163,7 @@ def _fmt_p(p):
     return "-" if not np.isfinite(p) else f"{p:.2g}"
 
 
-def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain, y, point_test, dem_cases, minutes,
+def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain_mean, y, point_test, dem_cases, minutes,
                     untestable=()):
     scale, unit = display_scale(lp["quantity"])
     q = lp["quantity"].replace("_", " ")
@@ -200,7 +201,7 @@ def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain, y, po
               f"{len(cands)} (candidates); the largest gain among the passing is chosen.", "",
               "| effect | parameter: fitted mean [90 %] | gain | SE | tests better | p | held-out RMSE | verdict |",
               "|---|---|---|---|---|---|---|---|"]
-    plain_rmse = _rmse(y, plain.predicted)
+    plain_rmse = _rmse(y, plain_mean)
     for c in cands:
         par = ", ".join(f"{n} {m:.3g} [{lo:.3g}, {hi:.3g}]" for n, m, (lo, hi) in zip(c["parameters"], c["mean"], c["interval90"]))
         verdict = "chosen" if c["chosen"] else ("rejected: gain not consistent across tests" if c["p"] >= 0.05 / len(cands)

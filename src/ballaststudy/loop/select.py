@@ -8,9 +8,11 @@ tests' measured points, carried over theta by a Gaussian-process surrogate
 Likelihood of one test's points: multivariate normal around the surrogate mean with the
 covariance of one more specimen, (1 + 1/K) times the case-to-case covariance of that
 test's points pooled over the sets, plus the measurement variance and the surrogate's own
-variance on the diagonal. The caller pools over every ensemble it ran - the plain model's
-and all candidates' sets (residual_covariances): the specimens scatter alike whatever the
-parameters, and plain model and candidates are then judged with the same noise. The points of a curve are correlated (a specimen is softer or
+variance on the diagonal. Each candidate is compared with the plain model under one noise
+model, the covariance pooled over the plain model's ensemble and the candidate's own sets
+(residual_covariances): not over other candidates', whose parameters may make specimens
+fail and scatter far more (found by bench/loop_undeclared.py: one unstable candidate's
+pooled scatter drowned every other candidate's gain). The points of a curve are correlated (a specimen is softer or
 stiffer all along): independent points would count one specimen's offset many times over.
 The pooled covariance is shrunk towards its diagonal (SHRINK) so that it stays positive
 definite with few cases.
@@ -145,10 +147,11 @@ def held_out_plain(curves, y, point_test, covs):
     return HeldOut(loglik[0], mean, np.zeros((loglik.shape[1], 0)))
 
 
-def choose(candidates, plain):
-    """(chosen name or None, {name: {gain, se, z, wins, p}}) by the rule in the module doc."""
+def choose(pairs):
+    """(chosen name or None, {name: {gain, se, z, wins, p}}) by the rule in the module doc;
+    pairs: {name: (the candidate's HeldOut, the plain model's under the same covariance)}."""
     evidence = {}
-    for name, held in candidates.items():
+    for name, (held, plain) in pairs.items():
         diff = held.lpd - plain.lpd
         se = float(np.sqrt(len(diff) * np.var(diff, ddof=1))) if len(diff) > 1 else np.inf
         gain = float(diff.sum())
@@ -156,6 +159,6 @@ def choose(candidates, plain):
         p = float(wilcoxon(decided, alternative="greater").pvalue) if decided.size else 1.0
         evidence[name] = dict(gain=gain, se=se, z=gain / se if se > 0 else np.inf,
                               wins=int(np.sum(diff >= GAIN_TIE)), tests=len(diff), p=p)
-    passing = {k: v for k, v in evidence.items() if v["gain"] > 0 and v["p"] < ALPHA / len(candidates)}
+    passing = {k: v for k, v in evidence.items() if v["gain"] > 0 and v["p"] < ALPHA / len(pairs)}
     chosen = max(passing, key=lambda k: passing[k]["gain"]) if passing else None
     return chosen, evidence
