@@ -10,6 +10,10 @@ far the loop gets; the scenarios' model runs are shared (one case cache).
     python bench/loop_undeclared.py OUT_DIR [none rate abrasion fouling end_restraint]
         [--truth-specimens M]   # "measured" = mean of M fresh specimens (a larger specimen's
                                 # lower scatter; default 1)
+        [--truth-from-model]    # "measured" = mean of the model's own K specimens with the
+                                # effect (common random numbers: the effect's signature
+                                # without a new specimen's scatter)
+        [--specimen-share S]    # loop.specimen_share (default 1)
 """
 import argparse
 import json
@@ -35,16 +39,17 @@ TRUTH = {"rate": {"contact_damping_ratio": 0.3}, "abrasion": {"wear_per_cycle": 
          "fouling": {"friction_loss": 0.6}, "end_restraint": {"platen_friction": 0.05}, "none": {}}
 
 
-def setup(d, truth_specimens):
+def setup(d, truth_specimens, specimen_share):
     from ballaststudy.rig.library import synthetic_library
     synthetic_library(24, size=(0.035, 0.065), r0=0.008, seed=3, database="tiny").to_netcdf(d / "BPM.nc")
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
     cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    cfg["loop"].update(cases=K, cycles=CYCLES, design_sets=3, measurement_sd=1e-5, posterior_samples=2048)
+    cfg["loop"].update(cases=K, cycles=CYCLES, design_sets=3, measurement_sd=1e-5, posterior_samples=2048,
+                       specimen_share=specimen_share)
     (d / "config.yaml").write_text(yaml.safe_dump(cfg))
     (d / "base.yaml").write_text(yaml.safe_dump({"parameters": BASE}))
-    for k in list(range(K)) + [100 + i for i in range(TESTS * truth_specimens)]:
+    for k in list(range(K)) + [100 + i for i in range(TESTS * truth_specimens)]:      # model's K, then fresh
         if not (d / f"s{k}.nc").exists():
             main(["case", "assemble", str(d / "BPM.nc"), "--case", str(k), "--rig", "biaxial", "--width-m", "0.12",
                   "--height-m", "0.24", "--config", str(d / "config.yaml"), "--out", str(d / f"s{k}.nc"), "--quiet"])
@@ -59,21 +64,20 @@ def conditions(folder, j):
     return path
 
 
-def planted_curve(d, name, j, cond, truth_specimens):
-    """The truth: the mean of the test's fresh specimens under the effect (failed: censored)."""
+def planted_curve(d, name, j, cond, specimens):
+    """The truth: the mean of ``specimens`` under the effect (failed: censored)."""
+    from concurrent.futures import ProcessPoolExecutor
     p = BiaxialParams.from_config(load_config(d / "config.yaml")["rig"])
     p.take_conditions(load_conditions(cond))
-    curves = []
-    for m in range(truth_specimens):
-        out = d / "planted" / name / f"t{j}_{m}.nc"
-        run_case(dict(specimen=str(d / f"s{100 + j * truth_specimens + m}.nc"), values=BASE, cycles=CYCLES,
-                      rig=p.to_dict(), effect=None if name == "none" else name, effect_values=TRUTH[name],
-                      metrics=None, conditions=str(cond), out=str(out)))
-        curves.append(case_curve(out, "axial_strain", CYCLES)[0])
-    return np.mean(curves, axis=0)
+    jobs = [dict(specimen=str(s), values=BASE, cycles=CYCLES, rig=p.to_dict(),
+                 effect=None if name == "none" else name, effect_values=TRUTH[name], metrics=None,
+                 conditions=str(cond), out=str(d / "planted" / name / f"t{j}_{Path(s).stem}.nc")) for s in specimens]
+    with ProcessPoolExecutor(2) as pool:
+        outs = list(pool.map(run_case, jobs))
+    return np.mean([case_curve(o, "axial_strain", CYCLES)[0] for o in outs], axis=0)
 
 
-def scenario(d, name, truth_specimens, seed=0):
+def scenario(d, name, truth_specimens, from_model, seed=0):
     folder = d / name
     shutil.rmtree(folder, ignore_errors=True)
     folder.mkdir()
@@ -81,7 +85,8 @@ def scenario(d, name, truth_specimens, seed=0):
     rng = np.random.default_rng(seed)
     for j in range(TESTS):
         cond = conditions(folder, j)
-        curve = planted_curve(d, name, j, cond, truth_specimens)
+        fresh = [d / f"s{100 + j * truth_specimens + m}.nc" for m in range(truth_specimens)]
+        curve = planted_curve(d, name, j, cond, [d / f"s{k}.nc" for k in range(K)] if from_model else fresh)
         m = int(rng.integers(11, 20))
         n = np.sort(np.exp(rng.uniform(0, math.log(CYCLES), m)))
         v = np.interp(np.log(n), np.log(np.arange(1, CYCLES + 1)), curve)
@@ -109,12 +114,15 @@ def parse():
     ap.add_argument("out", type=Path)
     ap.add_argument("scenarios", nargs="*", default=list(TRUTH))
     ap.add_argument("--truth-specimens", type=int, default=1)
+    ap.add_argument("--truth-from-model", action="store_true")
+    ap.add_argument("--specimen-share", type=float, default=1.0, help="loop.specimen_share (0 with "
+                    "--truth-from-model: the data are the model's own specimens)")
     return ap.parse_args()
 
 
 if __name__ == "__main__":
     args = parse()
     args.out.mkdir(parents=True, exist_ok=True)
-    setup(args.out, args.truth_specimens)
+    setup(args.out, args.truth_specimens, args.specimen_share)
     for s in args.scenarios:
-        scenario(args.out, s, args.truth_specimens)
+        scenario(args.out, s, args.truth_specimens, args.truth_from_model)

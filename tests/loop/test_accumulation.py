@@ -122,3 +122,14 @@ def test_linear_creep_gets_no_hardening(noise, seed):
     assert gamma < 0.1 * (eps[-1] - eps[0])
     assert beta == pytest.approx(1e-6, rel=0.1)
     assert eps0 == pytest.approx(0.01, rel=1e-3)
+
+
+def test_shakedown_law_is_sato_without_creep():
+    """Planted shakedown recovered exactly; on data with creep it stays below Sato's reading
+    far out (the two bracket a run too short to tell hardening from creep)."""
+    n = np.geomspace(1, 1000, 25)
+    fit = fit_law("shakedown", n, sato(n, (0.01, 0.03, 0.02, 0.0)))
+    np.testing.assert_allclose(fit.params, [0.01, 0.03, 0.02], rtol=1e-6)
+    creeping = sato(n, (0.01, 0.03, 0.02, 2e-6))
+    far = np.array([5e5])
+    assert predict(fit_law("shakedown", n, creeping), far)[0][0] < predict(fit_law("sato", n, creeping), far)[0][0]

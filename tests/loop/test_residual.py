@@ -88,3 +88,14 @@ def test_no_relation_nothing_significant():
     out = covariate_tests(rows, "bias", ["frequency_Hz", "confining_pressure_kPa", "VCI"])
     assert not any(r.get("significant") for r in out)
     assert [r["tried"] for r in out] == [True, True, False]          # VCI declared nowhere
+
+
+def test_one_test_alone_is_no_evidence():
+    """Six tests share a pressure, one differs and is far off: its residual would be the
+    whole evidence for a pressure relation, so pressure is not tried."""
+    rng = np.random.default_rng(6)
+    rows = [dict(source="A", confining_pressure_kPa=60, frequency_Hz=f, bias=rng.normal(0, 0.001))
+            for f in (5, 10, 20, 30, 40, 60)]
+    rows.append(dict(source="A", confining_pressure_kPa=30, frequency_Hz=20, bias=0.05))
+    out = {r["covariate"]: r for r in covariate_tests(rows, "bias", ["confining_pressure_kPa", "frequency_Hz"])}
+    assert not out["confining_pressure_kPa"]["tried"] and out["frequency_Hz"]["tried"]

@@ -89,3 +89,16 @@ def test_an_effect_that_changes_nothing_is_not_chosen():
     held = held_out_candidate(thetas, runs, measured, point_test, [0.0], [1.0], covs)
     chosen, evidence = choose({"nothing": (held, plain)})
     assert chosen is None and evidence["nothing"]["wins"] == 0 and evidence["nothing"]["p"] == 1.0
+
+
+def test_specimen_share_scales_only_the_specimen_part():
+    """(share + 1/K) x pooled + measurement: share 1 and share 0 differ by the pooled
+    covariance exactly, the measurement variance stays on the diagonal."""
+    rng = np.random.default_rng(5)
+    n, point_test = _points(rng)
+    curves = [_specimens(rng, n, point_test, None, 0.0, K) for _ in range(3)]
+    one = residual_covariances(curves, point_test, MEAS_SD ** 2)
+    none = residual_covariances(curves, point_test, MEAS_SD ** 2, specimen_share=0.0)
+    for t in one:
+        pooled = (one[t] - none[t])
+        assert np.allclose(none[t], pooled / K + MEAS_SD ** 2 * np.eye(len(pooled)), rtol=1e-12, atol=1e-18)

@@ -107,7 +107,9 @@ class Evaluator:
         self.cycles, self.quantity = int(cycles), quantity
         self.out_dir, self.jobs, self.progress = Path(out_dir), int(jobs), progress
         self.kind = kind_of(open_netcdf(self.specimens[0], "assembled"))
-        cfg = load_config(config)      # read once: a config edited meanwhile changes nothing
+        # read once (or given, loaded, by a caller making several Evaluators): a config
+        # edited meanwhile changes nothing
+        cfg = config if isinstance(config, dict) else load_config(config)
         self.metrics = cfg.get("metrics")
         self.tests = []
         for conditions, points in tests:

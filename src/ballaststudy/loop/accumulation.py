@@ -35,6 +35,13 @@ def sato(n, params):
     return eps0 - gamma * np.expm1(-alpha * cycles_after_first) + beta * cycles_after_first
 
 
+def shakedown(n, params):
+    """Sato's law without creep (beta = 0): eps0 + gamma (1 - exp(-alpha (N - 1))), the
+    plastic-shakedown reading of a run too short to tell hardening from creep."""
+    eps0, gamma, alpha = params
+    return sato(n, (eps0, gamma, alpha, 0.0))
+
+
 def log_law(n, params):
     """a + b ln N (reference only): a is the strain at N = 1, b the strain per e-fold of N."""
     a, b = params
@@ -47,9 +54,10 @@ def power_law(n, params):
     return a * np.asarray(n, float) ** b
 
 
-LAWS = {"sato": sato, "log": log_law, "power": power_law}
-PARAMETER_NAMES = {"sato": ("eps0", "gamma", "alpha", "beta"), "log": ("a", "b"), "power": ("a", "b")}
-_FITTED_AS_LOG = {"sato": ("alpha",)}   # rates that span decades are fitted as their logarithm
+LAWS = {"sato": sato, "shakedown": shakedown, "log": log_law, "power": power_law}
+PARAMETER_NAMES = {"sato": ("eps0", "gamma", "alpha", "beta"), "shakedown": ("eps0", "gamma", "alpha"),
+                   "log": ("a", "b"), "power": ("a", "b")}
+_FITTED_AS_LOG = {"sato": ("alpha",), "shakedown": ("alpha",)}   # rates spanning decades: fitted as logs
 
 
 @dataclass(frozen=True)
@@ -114,32 +122,35 @@ def _hardening_rate_range(n):
 
 def _bounds(name, n):
     """(lower, upper) bounds of the parameters of law `name` fitted on cycle counts n."""
-    if name == "sato":
+    if name in ("sato", "shakedown"):
         slowest, fastest = _hardening_rate_range(n)
-        return np.array([-np.inf, 0.0, slowest, 0.0]), np.array([np.inf, np.inf, fastest, np.inf])
+        lower, upper = np.array([-np.inf, 0.0, slowest, 0.0]), np.array([np.inf, np.inf, fastest, np.inf])
+        return (lower, upper) if name == "sato" else (lower[:3], upper[:3])
     if name == "power":
         return np.array([0.0, -np.inf]), np.array([np.inf, np.inf])
     return np.full(2, -np.inf), np.full(2, np.inf)
 
 
-def _start_sato(n, eps, weights):
+def _start_sato(n, eps, weights, creep=True):
     """Start at the best alpha of a log grid over the resolved range: for fixed alpha the law is
     linear in (eps0, gamma, beta), solved exactly with gamma, beta >= 0, so the nonlinear fit
-    begins in the right valley instead of a local minimum next to a guessed alpha."""
+    begins in the right valley instead of a local minimum next to a guessed alpha. Without
+    creep (the shakedown law) beta is left out."""
     cycles_after_first = n - 1.0
     span = cycles_after_first.max()
+    width = 3 if creep else 2
 
     def profile(alpha):
         design = np.column_stack([np.ones_like(n), -np.expm1(-alpha * cycles_after_first),
-                                  cycles_after_first / span])
+                                  cycles_after_first / span])[:, :width]
         solution = lsq_linear(design * weights[:, None], eps * weights,
-                              bounds=([-np.inf, 0.0, 0.0], [np.inf, np.inf, np.inf]), method="bvls")
+                              bounds=([-np.inf] + [0.0] * (width - 1), [np.inf] * width), method="bvls")
         return solution.cost, alpha, solution.x
 
-    _, alpha, (eps0, gamma, creep_over_span) = min(
-        (profile(alpha) for alpha in np.geomspace(*_hardening_rate_range(n), HARDENING_GRID)),
-        key=lambda candidate: candidate[0])
-    return np.array([eps0, gamma, alpha, creep_over_span / span])
+    _, alpha, x = min((profile(alpha) for alpha in np.geomspace(*_hardening_rate_range(n), HARDENING_GRID)),
+                      key=lambda candidate: candidate[0])
+    start = [x[0], x[1], alpha] + ([x[2] / span] if creep else [])
+    return np.array(start)
 
 
 def _start_log(n, eps, weights):
@@ -155,7 +166,8 @@ def _start_power(n, eps, weights):
     return np.array([np.exp(ln_a), b])
 
 
-_STARTS = {"sato": _start_sato, "log": _start_log, "power": _start_power}
+_STARTS = {"sato": _start_sato, "shakedown": lambda n, eps, w: _start_sato(n, eps, w, creep=False),
+           "log": _start_log, "power": _start_power}
 
 
 def fit_law(name, n, eps, sigma=None):

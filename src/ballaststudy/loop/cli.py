@@ -78,7 +78,8 @@ def _judge(runs, plain_at, y, point_test, lp, seed):
     from .select import fit_all, held_out_candidate, held_out_plain, residual_covariances
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
-        covs = residual_covariances([plain_at] + list(at), point_test, lp["measurement_sd"] ** 2)
+        covs = residual_covariances([plain_at] + list(at), point_test, lp["measurement_sd"] ** 2,
+                                    lp["specimen_share"])
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
         out[name] = (thetas, at, held_out_candidate(*args), fit_all(*args), evaluate,
                      held_out_plain(plain_at, y, point_test, covs))
@@ -107,7 +108,7 @@ def _loop(args):
     def make(names, effect=None):
         from ..calibration.runner import Evaluator
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
-                         args.config, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
+                         cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
                          progress=not args.quiet, effect=effect, base=base)
 
     plain_eval = make([])

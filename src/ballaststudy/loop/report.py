@@ -20,6 +20,7 @@ CF = "CF-1.8"
 COVARIATES = ("frequency_Hz", "confining_pressure_kPa", "deviator_max_kPa", "VCI")
 # the plain model's internal signals at its last simulated cycle (mean over the cases)
 SIGNALS = ("breakage_rate", "mean_coordination", "void_ratio", "volumetric_strain")
+LONG_TERM_LAWS = ("sato", "shakedown")
 
 
 def model_signals(out, key, tests, cases):
@@ -61,8 +62,9 @@ def per_test_rows(args, lp, curves, measured):
 
 
 def long_term(args, lp, curves):
-    """Per test: (N beyond the simulated cycles, measured there, Sato's extrapolation of
-    the ensemble mean there, the fit) from the full measured curve."""
+    """Per test: (N beyond the simulated cycles, measured there, {law: its extrapolation
+    there}, {law: the fit or None}) for Sato's law (hardening + creep) and the shakedown law
+    (no creep): a run too short to tell hardening from creep is read both ways."""
     from ..inputs import open_netcdf
     out = []
     cycles = np.arange(1, lp["cycles"] + 1, dtype=float)
@@ -70,12 +72,14 @@ def long_term(args, lp, curves):
         ds = open_netcdf(path, "measured")
         n, v = ds["cycle"].values, ds[lp["quantity"]].values
         beyond = np.isfinite(v) & (n > lp["cycles"])
-        try:
-            fit = fit_ensemble("sato", cycles, curves[j])
-        except (RuntimeError, ValueError):     # no convergence (a flat, censored ensemble)
-            out.append((n[beyond], v[beyond], np.full(beyond.sum(), np.nan), None))
-            continue
-        out.append((n[beyond], v[beyond], predict(fit, n[beyond])[0], fit))
+        preds, fits = {}, {}
+        for law in LONG_TERM_LAWS:
+            try:
+                fits[law] = fit_ensemble(law, cycles, curves[j])
+                preds[law] = predict(fits[law], n[beyond])[0]
+            except (RuntimeError, ValueError):     # no convergence (a flat, censored ensemble)
+                fits[law], preds[law] = None, np.full(beyond.sum(), np.nan)
+        out.append((n[beyond], v[beyond], preds, fits))
     return out
 
 
@@ -170,7 +174,8 @@ def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain_mean, 
     lines = ["# Closing the loop with measured data", "",
              f"{len(before)} tests, {lp['cases']} specimens per model and test, {lp['cycles']} simulated cycles "
              f"(the DEM horizon); {len(cands)} candidate effects at {lp['design_sets']} parameter sets each; "
-             f"{dem_cases} DEM cases, {minutes:.1f} min. Quantity: {q} [{unit}].", "",
+             f"{dem_cases} DEM cases ({minutes:.1f} min in this run; cases found in the cache are not rerun). "
+             f"Quantity: {q} [{unit}].", "",
              "## DEM horizon: measured vs the plain model, per test", "",
              "Residual = measured - ensemble mean at the measured points (N <= the simulated cycles). "
              "Bias and slope (per unit ln N) are judged as one more specimen of the ensemble (p: two-sided "
@@ -193,7 +198,7 @@ def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain_mean, 
             lines.append(f"| {r['response']} | {r['covariate']} | {r['tests']} | {r['slope']:.3g} | "
                          f"{_fmt_p(r['p'])} | {_fmt_p(r['p_holm'])} | {'yes' if r['significant'] else 'no'} |")
         else:
-            lines.append(f"| {r['response']} | {r['covariate']} | {r['tests']} | - | - | - | not tried (no variation within a source, or too few tests) |")
+            lines.append(f"| {r['response']} | {r['covariate']} | {r['tests']} | - | - | - | not tried (no variation within a source, one test alone carries it, or too few tests) |")
     lines += ["", "## Candidate effects, judged on held-out tests", "",
               "Each test left out once: the effect's parameter fitted on the others, the left-out test's "
               "points predicted. Gain = sum over tests of held-out log predictive density minus the plain "
@@ -221,22 +226,27 @@ def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain_mean, 
     else:
         lines += ["**No effect chosen**: none beats the plain model on held-out tests consistently enough; "
                   "the model is left unchanged.", ""]
-    lines += _long_term_lines(horizon, scale, unit, [r["test"] for r in before])
+    lines += _long_term_lines(horizon, scale, unit, [r["test"] for r in before], lp["cycles"])
     return "\n".join(lines) + "\n"
 
 
-def _long_term_lines(horizon, scale, unit, names):
+def _long_term_lines(horizon, scale, unit, names, cycles):
     lines = ["## Long-term horizon (extrapolated, reported apart)", "",
-             "Sato's law eps0 + gamma (1 - exp(-alpha (N - 1))) + beta (N - 1) fitted to each ensemble "
-             "mean over the simulated cycles and extrapolated to the measured points beyond them. An "
-             "extrapolation over decades of N: read it as what the DEM horizon implies, not as a prediction "
-             "the DEM made.", "",
-             "| test | points beyond | RMSE before | RMSE after | Sato gamma, alpha, beta (plain) |", "|---|---|---|---|---|"]
-    for j, (n, v, pred, fit) in enumerate(horizon["before"]):
+             "Each ensemble mean over the simulated cycles fitted by Sato's law eps0 + gamma (1 - exp(-alpha "
+             "(N - 1))) + beta (N - 1) and by the shakedown law (beta = 0), extrapolated to the measured points "
+             "beyond them. A run too short to tell hardening from creep is read both ways: creep carried over "
+             "decades of N (Sato) against none (shakedown). Read it as what the DEM horizon implies, not as a "
+             "prediction the DEM made.", "",
+             "| test | points beyond | decades extrapolated | RMSE Sato before / after | RMSE shakedown before / after "
+             "| Sato gamma, alpha, beta (plain) |", "|---|---|---|---|---|---|"]
+    for j, (n, v, pred, fits) in enumerate(horizon["before"]):
         after = horizon["after"][j][2] if horizon["after"] else None
-        a = f"{scale * _rmse(v, after):.3g}" if after is not None else "-"
+        cells = [f"{scale * _rmse(v, pred[law]):.3g} / " + (f"{scale * _rmse(v, after[law]):.3g}" if after else "-")
+                 for law in LONG_TERM_LAWS]
+        fit = fits["sato"]
         law = "no fit (did not converge)" if fit is None else ", ".join(f"{x:.3g}" for x in fit.params[1:])
-        lines.append(f"| {names[j]} | {n.size} | {scale * _rmse(v, pred):.3g} | {a} | {law} |")
+        decades = f"{np.log10(n.max() / cycles):.1f}" if n.size else "-"
+        lines.append(f"| {names[j]} | {n.size} | {decades} | {cells[0]} | {cells[1]} | {law} |")
     return lines + [""]
 
 
@@ -261,8 +271,9 @@ def plot_curves(path, lp, measured, plain_set, after, horizon, names):
             c = scale * ens["curves"][j]
             ax.plot(cycles, c.mean(axis=0), color=colour, lw=2, label=label)
             ax.fill_between(cycles, c.min(axis=0), c.max(axis=0), color=colour, alpha=0.2)
-            if lt[j][3] is not None:
-                ax.plot(far, scale * predict(lt[j][3], far)[0], color=colour, ls="--", lw=1)
+            for law, style in zip(LONG_TERM_LAWS, ("--", ":")):
+                if lt[j][3][law] is not None:
+                    ax.plot(far, scale * predict(lt[j][3][law], far)[0], color=colour, ls=style, lw=1)
         n, v = measured[j]
         ax.plot(n, scale * v, "ko", ms=3, label="measured (DEM horizon)")
         ax.plot(horizon["before"][j][0], scale * horizon["before"][j][1], "o", mfc="none", mec="k", ms=3,
@@ -273,8 +284,8 @@ def plot_curves(path, lp, measured, plain_set, after, horizon, names):
         ax.set_ylabel(f"{lp['quantity'].replace('_', ' ')} [{unit}]")
         ax.grid(alpha=0.3)
     axes.flat[0].legend(fontsize=6)
-    fig.suptitle("measured vs model: DEM horizon (solid, band = min-max of the cases), Sato extrapolation "
-                 "(dashed)", fontsize=8)
+    fig.suptitle("measured vs model: DEM horizon (solid, band = min-max of the cases), extrapolated by "
+                 "Sato (dashed) and shakedown (dotted)", fontsize=8)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", bbox_inches="tight")
     plt.close(fig)

@@ -94,8 +94,9 @@ def summary(res):
 def covariate_tests(rows, response, covariates, group="source"):
     """Each covariate's slope on ``response`` across the tests (rows: dicts with the
     response, the covariates where declared and the group), one intercept per group, with
-    its t-test p and the Holm-adjusted p over the covariates tried. A covariate that varies
-    in no group is reported untried."""
+    its t-test p and the Holm-adjusted p over the covariates tried. Untried (reported so):
+    a covariate that varies in no group, or whose variation one test alone carries (all
+    but one test share a value: that test's residual would be the whole evidence)."""
     results = []
     for cov in covariates:
         sel = [r for r in rows if np.isfinite(r.get(cov, np.nan)) and np.isfinite(r[response])]
@@ -104,6 +105,9 @@ def covariate_tests(rows, response, covariates, group="source"):
         y = np.array([r[response] for r in sel], float)
         g = np.array([groups.index(r[group]) for r in sel])
         varies = any(np.ptp(x[g == j]) > 0 for j in range(len(groups))) if sel else False
+        if varies:
+            _, counts = np.unique(x, return_counts=True)
+            varies = len(x) - counts.max() >= 2
         dof = len(sel) - len(groups) - 1
         row = dict(covariate=cov, response=response, tests=len(sel), groups=len(groups),
                    slope=np.nan, se=np.nan, p=np.nan, tried=bool(varies and dof > 0))

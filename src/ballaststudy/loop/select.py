@@ -68,9 +68,13 @@ def _mvn_logpdf(r, cov):
     return -0.5 * (np.sum(z ** 2, axis=-1) + logdet + r.shape[-1] * np.log(2 * np.pi))
 
 
-def residual_covariances(curves_list, point_test, measurement_var):
-    """{test: covariance of one more specimen's residual}: (1 + 1/K) pooled + measurement."""
-    inflate = 1.0 + np.mean([1.0 / len(c) for c in curves_list])
+def residual_covariances(curves_list, point_test, measurement_var, specimen_share=1.0):
+    """{test: covariance of the measured curve's residual}: (specimen_share + 1/K) pooled +
+    measurement. specimen_share: the measured specimen's own scatter as a share of one model
+    specimen's - 1 (the default) if the test's specimen scatters like one of ours; less for
+    a test on a larger specimen (a 3D cell holds far more stones than a 2D slice); 0 if the
+    measured curve is the model's own ensemble (model-made data on the same specimens)."""
+    inflate = specimen_share + np.mean([1.0 / len(c) for c in curves_list])
     return {t: inflate * pooled_covariance(curves_list, point_test, t)
             + measurement_var * np.eye(int(np.sum(np.asarray(point_test) == t)))
             for t in np.unique(point_test)}
