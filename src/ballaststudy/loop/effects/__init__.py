@@ -34,7 +34,7 @@ class Effect:
     name: str
     mechanism: str
     parameters: tuple                   # EffectParameter
-    configure: Callable                 # (rig, values, conditions) before the loading run
+    configure: Callable = None          # (rig, values, conditions) before the loading run
     hook: Callable = None               # (values) -> end-of-cycle hook(run, cycle)
     covariate: str = None               # acts only through this declared covariate (else everywhere)
 
@@ -84,7 +84,8 @@ def switch_on(name, rig, values, conditions):
     """Effect ``name`` with ``values`` on an assembled rig under a test's conditions."""
     effect = EFFECTS[name]
     effect.check(values)
-    effect.configure(rig, values, conditions)
+    if effect.configure:
+        effect.configure(rig, values, conditions)
 
 
 def hooks(name, values):

@@ -39,12 +39,8 @@ def hook(values):
     return end_of_cycle
 
 
-def configure(rig, values, conditions):
-    """Nothing before the run: the wear happens cycle by cycle (the hook)."""
-
-
 EFFECT = Effect(
     "abrasion", "flat joints of stone balls in the strong force network lose a share of their "
     "strength every cycle",
     (EffectParameter("wear_per_cycle", "share of a loaded joint's strength lost per cycle", "1", 0.0, 0.2),),
-    configure, hook)
+    hook=hook)
