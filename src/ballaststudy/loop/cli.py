@@ -16,6 +16,7 @@
 Writes loop.nc, report.md, chosen.yaml and one figure per test into the folder; the cases
 are cached by parameter hash under cases/ (an interrupted loop resumes)."""
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -71,18 +72,28 @@ def _bounds(name):
     return np.array([p.low for p in ps]), np.array([p.high for p in ps])
 
 
+@dataclass
+class Candidate:
+    """One candidate effect's runs and how it was judged."""
+    thetas: np.ndarray       # (J, d) design sets
+    at: list                 # J arrays (K, P): its cases at the measured points
+    held: object             # select.HeldOut of the candidate
+    fit: tuple               # select.fit_all: (mean (d,), interval90 (d, 2), ess)
+    evaluate: object         # its runner.Evaluator (sets: every run, design first)
+    plain: object            # select.HeldOut of the plain model under the same covariance
+
+
 def _judge(runs, plain_at, y, point_test, lp, seed):
-    """{effect: (thetas, at, HeldOut, fit_all, Evaluator, the plain model's HeldOut)}: each
-    candidate and the plain model under one noise model, the case covariance pooled over
-    the plain ensemble and the candidate's sets (select.py)."""
+    """{effect: Candidate}: each candidate and the plain model under one noise model, the
+    case covariance pooled over the plain ensemble and the candidate's sets (select.py)."""
     from .select import fit_all, held_out_candidate, held_out_plain, residual_covariances
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
         covs = residual_covariances([plain_at] + list(at), point_test, lp["measurement_sd"] ** 2,
                                     lp["specimen_share"])
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
-        out[name] = (thetas, at, held_out_candidate(*args), fit_all(*args), evaluate,
-                     held_out_plain(plain_at, y, point_test, covs))
+        out[name] = Candidate(thetas, at, held_out_candidate(*args), fit_all(*args), evaluate,
+                              held_out_plain(plain_at, y, point_test, covs))
     return out
 
 
@@ -117,16 +128,19 @@ def _loop(args):
     untestable = [e for e in lp["effects"] if not EFFECTS[e].testable(conditions)]
     runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
     candidates = _judge(runs, plain_at, y, point_test, lp, cfg["seed"])
-    chosen, evidence = choose({k: (v[2], v[5]) for k, v in candidates.items()})
+    chosen, evidence = choose({k: (c.held, c.plain) for k, c in candidates.items()})
     after = None
     if chosen:
-        mean = candidates[chosen][3][0]
-        candidates[chosen][4](mean[None])           # the chosen effect at its fitted value
-        after = candidates[chosen][4].sets[-1]
+        best = candidates[chosen]
+        best.evaluate(best.fit[0][None])            # the chosen effect at its fitted value
+        after = best.evaluate.sets[-1]
     files = write_outputs(out, args, lp, measured, plain_eval.sets[0], plain_at.mean(axis=0), candidates, evidence,
                           chosen, after, base, untestable, minutes=(time.time() - t0) / 60)
     recorder.finish()
-    cases = sorted(p for p in (out / "cases").rglob("*.nc"))
+    sets = plain_eval.sets + [st for c in candidates.values() for st in c.evaluate.sets]
+    cases = [out / "cases" / st["key"] / f"test{j}" / f"case{k}.nc"   # this run's sets (the
+             for st in sets for j in range(len(args.measured))       # folder may cache older ones)
+             for k in range(len(args.specimens))]
     recorder.write_beside(files[0], also=files[1:] + cases)
     if not args.quiet:
         print(f"wrote {out}: effect chosen: {chosen or 'none'}")

@@ -85,13 +85,24 @@ def long_term(args, lp, curves):
 
 def candidate_rows(candidates, evidence, y, point_test, chosen):
     rows = []
-    for name, (thetas, _, held, (mean, interval, ess), _, _) in candidates.items():
+    for name, c in candidates.items():
+        held, (mean, interval, ess) = c.held, c.fit
         eff = EFFECTS[name]
         rows.append(dict(effect=name, parameters=[p.name for p in eff.parameters],
                          mean=mean.tolist(), interval90=interval.tolist(), ess=ess,
                          held_out_rmse=held.rmse(y, point_test), chosen=name == chosen,
                          **evidence[name]))
     return rows
+
+
+def _padded(rows, fill):
+    """Ragged last axis -> one array, short rows filled (effects have one or two parameters)."""
+    rows = [np.asarray(r) for r in rows]
+    width = max(r.shape[-1] for r in rows)
+    out = np.full((len(rows), *rows[0].shape[:-1], width), fill, dtype=object if fill == "" else float)
+    for i, r in enumerate(rows):
+        out[i, ..., : r.shape[-1]] = r
+    return out.astype(str) if fill == "" else out
 
 
 def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, point_test, plain_mean):
@@ -103,17 +114,19 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
         "point_test": ("point", point_test.astype(np.int32), {"units": "1", "long_name": "test of the point"}),
         "plain": (("test", "case", "cycle"), plain_set["curves"], {"units": units, "long_name": "plain model: simulated " + long_name}),
         "plain_prediction": ("point", plain_mean, {"units": units, "long_name": "plain model: ensemble mean at the point"}),
-        "plain_lpd": (("effect", "test"), np.array([c[5].lpd for c in candidates.values()]),
+        "plain_lpd": (("effect", "test"), np.array([c.plain.lpd for c in candidates.values()]),
                       {"units": "1", "long_name": "plain model: log predictive density of the test's points, under the noise model of its comparison with the effect"}),
         "candidate": (("effect", "set", "test", "case", "cycle"),
-                      np.array([[s["curves"] for s in c[4].sets[: len(c[0])]] for c in candidates.values()]),
+                      np.array([[s["curves"] for s in c.evaluate.sets[: len(c.thetas)]] for c in candidates.values()]),
                       {"units": units, "long_name": "candidate effect at a design set: simulated " + long_name}),
-        "candidate_value": (("effect", "set"), np.array([c[0][:, 0] for c in candidates.values()]),
-                            {"units": "1", "long_name": "the effect's parameter at the set (effect_parameter)"}),
-        "effect_parameter": ("effect", [EFFECTS[k].parameters[0].name for k in names], {"long_name": "the effect's parameter"}),
-        "held_out_lpd": (("effect", "test"), np.array([c[2].lpd for c in candidates.values()]),
+        "candidate_value": (("effect", "set", "parameter_index"), _padded([c.thetas for c in candidates.values()], np.nan),
+                            {"units": "1", "long_name": "the effect's parameter values at the set (effect_parameter; NaN: it has fewer)"}),
+        "effect_parameter": (("effect", "parameter_index"),
+                             _padded([[p.name for p in EFFECTS[k].parameters] for k in names], ""),
+                             {"long_name": "the effect's parameters (empty: it has fewer)"}),
+        "held_out_lpd": (("effect", "test"), np.array([c.held.lpd for c in candidates.values()]),
                          {"units": "1", "long_name": "held-out log predictive density (the test left out of the fit)"}),
-        "held_out_prediction": (("effect", "point"), np.array([c[2].predicted for c in candidates.values()]),
+        "held_out_prediction": (("effect", "point"), np.array([c.held.predicted for c in candidates.values()]),
                                 {"units": units, "long_name": "held-out prediction of the point (its test left out)"}),
     }
     if after is not None:
@@ -144,7 +157,7 @@ def write_outputs(out, args, lp, measured, plain_set, plain_mean, candidates, ev
                     untestable_effects=", ".join(untestable) or "none")
     with atomic_path(files[1]) as tmp:
         ds.to_netcdf(tmp)
-    dem_cases = len(args.specimens) * len(args.measured) * (1 + sum(len(c[4].sets) for c in candidates.values()))
+    dem_cases = len(args.specimens) * len(args.measured) * (1 + sum(len(c.evaluate.sets) for c in candidates.values()))
     with atomic_path(files[2]) as tmp:
         tmp.write_text(yaml.safe_dump(_chosen_doc(chosen, cands, base), sort_keys=False))
     plot_curves(files[3], lp, measured, plain_set, after, horizon, [r["test"] for r in before])
