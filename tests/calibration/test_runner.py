@@ -85,6 +85,21 @@ def test_set_key_changes_with_what_decides_the_cases():
     assert key != set_key({"F_str_co": 3.5, "mu": 0.7}, {**ctx, "cycles": 6})
 
 
+def test_a_covariate_edited_changes_the_cache_key(specimen, tmp_path, fast_config, planted_conditions):
+    """An effect may act through a declared covariate (fouling through VCI): the same p, q
+    and f at another VCI is another set of cases, not a cached one."""
+    from ballaststudy.calibration.runner import Evaluator
+    config = fast_config(tmp_path)
+    keys = []
+    for vci in (20.0, 60.0, 60.0):
+        c = planted_conditions(tmp_path / f"v{len(keys)}.yaml", 50.0,
+                               covariates={"VCI": {"value": vci, "units": "%"}})
+        ev = Evaluator(["friction_loss"], [specimen], [(c, np.array([1.0]))], config, 2, "axial_strain",
+                       tmp_path / "cal", effect="fouling")
+        keys.append(ev.jobs_for({"friction_loss": 0.5})[0])
+    assert keys[0] != keys[1] and keys[1] == keys[2]
+
+
 def test_config_error_crosses_process_boundaries():
     """A worker's bad-input error reaches the parent as the same one line."""
     import pickle

@@ -114,11 +114,15 @@ class Evaluator:
         self.tests = []
         for conditions, points in tests:
             params = params_from_config(self.kind, cfg.get("rig", {}))
-            params.take_conditions(load_conditions(conditions))
+            loaded = load_conditions(conditions)
+            params.take_conditions(loaded)
             self.tests.append(dict(conditions=str(conditions), points=np.asarray(points, float),
-                                   rig=params.to_dict()))
+                                   rig=params.to_dict(), covariates=loaded.get("covariates") or {}))
         self.effect, self.base = effect, dict(base or {})
+        # the covariates too: an effect may act through one (fouling through VCI), and a
+        # test's VCI edited must not reuse cases run at the old one
         self.context = {"cycles": self.cycles, "rig": [t["rig"] for t in self.tests],
+                        "covariates": [t["covariates"] for t in self.tests],
                         "metrics": self.metrics, "effect": effect, "base": self.base,
                         "specimens": [Path(s).name for s in self.specimens]}
         self.sets = []
