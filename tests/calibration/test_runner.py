@@ -100,6 +100,20 @@ def test_a_covariate_edited_changes_the_cache_key(specimen, tmp_path, fast_confi
     assert keys[0] != keys[1] and keys[1] == keys[2]
 
 
+def test_the_plain_model_runs_at_the_fixed_parameters(specimen, tmp_path, fast_config, planted_conditions):
+    """The loop's plain model (no effect, nothing varied) and its candidates (an effect on
+    top) both run at the fixed material parameters (e.g. calibrated ones)."""
+    from ballaststudy.calibration.runner import Evaluator
+    config, c = fast_config(tmp_path), planted_conditions(tmp_path / "t.yaml", 50.0)
+    base = {"F_str_co": 1.0}
+    plain = Evaluator([], [specimen], [(c, np.array([1.0]))], config, 2, "axial_strain", tmp_path, base=base)
+    rate = Evaluator(["contact_damping_ratio"], [specimen], [(c, np.array([1.0]))], config, 2, "axial_strain",
+                     tmp_path, effect="rate", base=base)
+    assert plain.jobs_for({})[1][0][0]["values"] == base
+    job = rate.jobs_for({"contact_damping_ratio": 0.3})[1][0][0]
+    assert job["values"] == base and job["effect_values"] == {"contact_damping_ratio": 0.3}
+
+
 def test_config_error_crosses_process_boundaries():
     """A worker's bad-input error reaches the parent as the same one line."""
     import pickle

@@ -129,7 +129,9 @@ class Evaluator:
 
     def jobs_for(self, values):
         key = set_key(values, self.context)
-        material, effect_values = (self.base, values) if self.effect else (values, {})
+        # the fixed material parameters under every set: an effect's on top of them, and the
+        # plain model (no effect, nothing varied) is the model at them, not Table 4.2's
+        material, effect_values = (self.base, values) if self.effect else ({**self.base, **values}, {})
         return key, [[dict(specimen=s, values=material, cycles=self.cycles, rig=t["rig"],
                            effect=self.effect, effect_values=effect_values,
                            metrics=self.metrics, conditions=t["conditions"],
