@@ -130,6 +130,27 @@ def test_surrogate_units_and_uncertainty():
     assert rmse(mu, np.sin(3 * np.linspace(0.1, 0.9, 9))[:, None]) < 2 * np.sqrt(np.mean(std ** 2))
 
 
+def test_grouped_surrogate_follows_the_one_test_an_effect_acts_in():
+    """Outputs in groups (the loop's tests): an effect that moves one test's points (a step
+    of 3 noise sd across theta) and leaves seven tests at set-to-set noise. One GP per group
+    follows the signal within its noise; the noise-only groups stay flat around their mean,
+    their scatter not taken for a trend."""
+    rng = np.random.default_rng(4)
+    thetas = initial_design([0.0], [1.0], 5, seed=2)
+    groups = np.repeat(np.arange(8), 4)
+    signal = 0.01 * np.tanh(4 * (thetas[:, 0] - 0.5))[:, None] * np.ones(4)
+    means = rng.normal(1e-3, 3e-4, (5, 32))
+    means[:, :4] += signal
+    sur = Surrogate([0.0], [1.0]).fit(thetas, means, groups=groups)
+    at = np.array([[0.1], [0.9]])
+    mu, std = sur.predict(at)
+    truth = 1e-3 + 0.01 * np.tanh(4 * (at[:, 0] - 0.5))
+    np.testing.assert_allclose(mu[:, :4], np.repeat(truth[:, None], 4, axis=1), atol=1.5e-3)
+    rest = mu[:, 4:]
+    assert np.all(np.abs(rest[1] - rest[0]) < 6e-4)        # flat: < 2 noise sd between the ends
+    assert std.shape == (2, 32) and np.all(np.isfinite(std))
+
+
 def test_ensemble_stats_hand_computed():
     set1 = np.array([[1.0, 10.0], [3.0, 14.0]])             # SS = [2, 8], K - 1 = 1
     set2 = np.array([[0.0, 0.0], [3.0, 3.0], [6.0, 0.0]])   # SS = [18, 6], K - 1 = 2

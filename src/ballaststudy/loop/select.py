@@ -105,7 +105,8 @@ class HeldOut:
 def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed):
     """(prior samples (M, d), surrogate means (M, P), log-likelihood per test (M, T))."""
     lower, upper = _box(lower, upper)
-    surrogate = Surrogate(lower, upper, seed).fit(thetas, [c.mean(axis=0) for c in curves_list])
+    surrogate = Surrogate(lower, upper, seed).fit(thetas, [c.mean(axis=0) for c in curves_list],
+                                                  groups=point_test)      # one GP per test
     exponent = max(int(np.ceil(np.log2(n_samples))), 0)
     samples = _from_unit(qmc.Sobol(len(lower), rng=seed).random_base2(exponent), lower, upper)
     mean, sd = surrogate.predict(samples)

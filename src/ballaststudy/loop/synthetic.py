@@ -1,0 +1,85 @@
+"""Data with an undeclared effect (issue 14): "measured" tests made by the model itself with
+one candidate effect switched on - at a strength the data do not state - and digitised like
+the shared measurements, so that the loop can be checked where the answer is known.
+
+A planted test's curve is the ensemble mean of the given specimens under the effect (run
+through the loop's own runner, so the truth's cases sit in the same cache), read off at
+11-35 cycle counts uniform in ln N (digitised points crowd no decade) with Gaussian noise of
+a share of the curve's final value (a digitiser's error scales with the plot's axis). The
+files written are the ones a user writes for a real test: a conditions YAML (p, q bounds, f,
+covariates; no effect, no strength) and the curve file, imported to the test's netCDF.
+
+Given the loop's own specimens the truth is the model's ensemble with the effect (common
+random numbers: the effect's signature without a new specimen's scatter, run the loop with
+``specimen_share`` 0); given fresh specimens it carries their scatter too (share 1)."""
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+POINTS = (11, 35)           # digitised points per curve, as in the shared measured data
+
+
+@dataclass(frozen=True)
+class PlantedTest:
+    """The conditions of one planted test (what its YAML declares)."""
+    confining_pressure_kPa: float
+    deviator_min_kPa: float
+    deviator_max_kPa: float
+    frequency_Hz: float
+    VCI_percent: float = 0.0
+
+    def conditions(self, curve_file):
+        cov = {"VCI": {"value": float(self.VCI_percent), "units": "%"}} if self.VCI_percent else {}
+        return dict(source="planted (model-made: an undeclared effect)", rig="triaxial",
+                    confining_pressure_kPa=float(self.confining_pressure_kPa),
+                    deviator_min_kPa=float(self.deviator_min_kPa),
+                    deviator_max_kPa=float(self.deviator_max_kPa), frequency_Hz=float(self.frequency_Hz),
+                    **({"covariates": cov} if cov else {}),
+                    curves=[dict(file=curve_file, quantity="axial_strain", units="1",
+                                 sign="compression_positive")])
+
+
+def digitise(curve, rng, noise_share, points=POINTS):
+    """(N, value) of a curve of cycles 1..len(curve) read at a random number of cycle counts
+    (``points`` bounds) uniform in ln N, with noise of sd ``noise_share`` x |final value|."""
+    m = int(rng.integers(points[0], points[1] + 1))
+    n = np.sort(np.exp(rng.uniform(0.0, math.log(curve.size), m)))
+    value = np.interp(np.log(n), np.log(np.arange(1, curve.size + 1)), curve)
+    return n, value + rng.normal(0.0, noise_share * abs(curve[-1]), m)
+
+
+def truth_curves(tests_yaml, specimens, config, cycles, out_dir, effect=None, values=None,
+                 base=None, jobs=1):
+    """(T, cycles) ensemble-mean axial strain of ``specimens`` under each test with
+    ``effect`` at ``values`` (None: the plain model), cases cached under out_dir/cases."""
+    from ..calibration.runner import Evaluator
+    values = dict(values or {})
+    evaluate = Evaluator(list(values), specimens, [(c, np.arange(1.0, cycles + 1)) for c in tests_yaml],
+                         config, cycles, "axial_strain", out_dir, jobs=jobs, effect=effect, base=base)
+    evaluate(np.array([list(values.values())]))
+    return evaluate.sets[0]["curves"].mean(axis=1)
+
+
+def plant(folder, tests, specimens, config, cycles, effect=None, values=None, base=None,
+          noise_share=0.01, seed=0, cache=None, jobs=1):
+    """Write the planted tests t<j>.yaml / t<j>.dat / t<j>.nc into ``folder``; returns
+    (measured netCDFs, conditions YAMLs). The truth's cases go to ``cache`` (default folder)."""
+    from ..measured.importer import import_test
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    conditions = []
+    for j, t in enumerate(tests):
+        conditions.append(folder / f"t{j}.yaml")
+        conditions[-1].write_text(yaml.safe_dump(t.conditions(f"t{j}.dat"), sort_keys=False))
+    truth = truth_curves(conditions, specimens, config, cycles, cache or folder, effect, values, base, jobs)
+    rng = np.random.default_rng(seed)
+    measured = []
+    for j, curve in enumerate(truth):
+        n, v = digitise(curve, rng, noise_share)
+        (folder / f"t{j}.dat").write_text("".join(f"{a!r}, {b!r}\n" for a, b in zip(n.tolist(), v.tolist())))
+        measured.append(folder / f"t{j}.nc")
+        import_test(conditions[j], measured[-1])
+    return measured, conditions
