@@ -1,0 +1,42 @@
+"""Model-made measured tests (loop/synthetic.py): digitised like the shared data - 11-35
+points within the simulated cycles, spread uniformly in ln N, noise of the stated share of
+the final value - and declared like a real test: conditions and covariates, nothing that
+names the effect or its strength."""
+import numpy as np
+import yaml
+
+from ballaststudy.loop.synthetic import POINTS, PlantedTest, digitise
+from ballaststudy.measured.importer import import_test, load_conditions
+
+
+def test_digitised_points_uneven_in_ln_n_with_the_stated_noise():
+    curve = 0.01 + 0.002 * np.log(np.arange(1, 21))          # linear in ln N: exact in between
+    counts, residuals, logs = [], [], []
+    for seed in range(400):
+        n, v = digitise(curve, np.random.default_rng(seed), 0.01)
+        assert np.all(np.diff(n) >= 0) and n[0] >= 1.0 and n[-1] <= 20.0
+        counts.append(n.size)
+        residuals.append(v - (0.01 + 0.002 * np.log(n)))
+        logs.append(np.log(n) / np.log(20.0))
+    assert min(counts) == POINTS[0] and max(counts) == POINTS[1]
+    r = np.concatenate(residuals)
+    np.testing.assert_allclose(r.std(), 0.01 * curve[-1], rtol=0.03)
+    assert abs(r.mean()) < 3 * r.std() / np.sqrt(r.size)
+    # uniform in ln N: each fifth of the log range holds a fifth of the points (not of N)
+    share = np.histogram(np.concatenate(logs), bins=5, range=(0, 1))[0] / sum(counts)
+    np.testing.assert_allclose(share, 0.2, atol=0.01)
+
+
+def test_a_planted_test_declares_conditions_only(tmp_path):
+    t = PlantedTest(30.0, 10.0, 50.0, 20.0, VCI_percent=40.0)
+    (tmp_path / "t.yaml").write_text(yaml.safe_dump(t.conditions("t.dat")))
+    (tmp_path / "t.dat").write_text("1.0, 0.001\n2.5, 0.0015\n")
+    cfg = load_conditions(tmp_path / "t.yaml")
+    assert (cfg["confining_pressure_kPa"], cfg["deviator_max_kPa"], cfg["frequency_Hz"]) == (30.0, 50.0, 20.0)
+    assert cfg["covariates"] == {"VCI": {"value": 40.0, "units": "%"}}
+    text = (tmp_path / "t.yaml").read_text()
+    for word in ("rate", "abrasion", "fouling", "restraint", "friction", "wear", "damping"):
+        assert word not in text
+    import_test(tmp_path / "t.yaml", tmp_path / "t.nc")
+    clean = PlantedTest(30.0, 10.0, 50.0, 20.0).conditions("t.dat")
+    assert "covariates" not in clean
