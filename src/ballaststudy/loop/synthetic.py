@@ -83,3 +83,68 @@ def plant(folder, tests, specimens, config, cycles, effect=None, values=None, ba
         measured.append(folder / f"t{j}.nc")
         import_test(conditions[j], measured[-1])
     return measured, conditions
+
+
+# The undeclared-effect scenarios (bench/loop_undeclared.py, tests/loop/test_undeclared.py):
+# eight tests, so that every candidate's rule can pass (a one-sided signed-rank test over 8
+# tests at 0.05 / 4 candidates needs 7 of them better), each declaring a VCI (fouling acts
+# through it), p and f varied; weak joints, so that wear can break them within a few cycles.
+SCENARIO_TESTS = tuple(PlantedTest(p, 10.0, 50.0, f, vci) for p, f, vci in zip(
+    (30, 40, 30, 40, 30, 40, 30, 40), (5, 10, 15, 20, 30, 40, 50, 60), (10, 20, 30, 40, 50, 60, 70, 80)))
+SCENARIO_BASE = {"F_str_co": 1.0}
+PLANTED = {"none": {}, "rate": {"contact_damping_ratio": 0.3}, "abrasion": {"wear_per_cycle": 0.12},
+           "fouling": {"friction_loss": 0.6}, "end_restraint": {"platen_friction": 0.2}}
+
+
+def scenario_setup(folder, config_file, cases=3, cycles=12, design_sets=5, specimen_share=0.0,
+                   library=None, size_m=(0.12, 0.24)):
+    """A synthetic BPM library, a config for the loop at this scale and ``cases`` assembled
+    biaxial specimens in ``folder``; returns (specimens, config, base parameters YAML)."""
+    from ..cli import main
+    from ..rig.library import synthetic_library
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    lib = dict(n_stones=24, size=(0.035, 0.065), r0=0.008, seed=3, database="tiny", **(library or {}))
+    if not (folder / "BPM.nc").exists():
+        synthetic_library(**lib).to_netcdf(folder / "BPM.nc")
+    cfg = yaml.safe_load(Path(config_file).read_text())
+    cfg["databases_file"] = str(Path(config_file).parent / cfg["databases_file"])
+    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
+    cfg["loop"].update(cases=cases, cycles=cycles, design_sets=design_sets, measurement_sd=1e-5,
+                       posterior_samples=4096, specimen_share=float(specimen_share))
+    (folder / "config.yaml").write_text(yaml.safe_dump(cfg))
+    (folder / "base.yaml").write_text(yaml.safe_dump({"parameters": SCENARIO_BASE}))
+    specimens = [folder / f"s{k}.nc" for k in range(cases)]
+    for k, s in enumerate(specimens):
+        if not s.exists():
+            main(["case", "assemble", str(folder / "BPM.nc"), "--case", str(k), "--rig", "biaxial", "--width-m",
+                  str(size_m[0]), "--height-m", str(size_m[1]), "--config", str(folder / "config.yaml"),
+                  "--out", str(s), "--quiet"])
+    return specimens, folder / "config.yaml", folder / "base.yaml"
+
+
+def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, seed=0):
+    """Plant SCENARIO_TESTS with effect ``name`` (PLANTED; "none": the plain model) and run
+    the loop on them, its cases cached in ``folder``/cases (shared by the scenarios).
+    Returns (chosen effect or None, the candidates' evidence, the plain model's RMSE)."""
+    import json
+
+    import xarray as xr
+
+    from ..cli import main
+    folder = Path(folder)
+    measured, conditions = plant(folder / name / "tests", SCENARIO_TESTS, truth_specimens or specimens,
+                                 folder / "config.yaml", cycles, None if name == "none" else name,
+                                 PLANTED[name], SCENARIO_BASE, seed=seed, cache=folder, jobs=jobs)
+    out = folder / name / "loop"
+    out.mkdir(parents=True, exist_ok=True)
+    if not (out / "cases").exists():
+        (out / "cases").symlink_to((folder / "cases").resolve())
+    main(["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens", *map(str, specimens),
+          "--parameters", str(folder / "base.yaml"), "--out-dir", str(out), "--jobs", str(jobs), "--config",
+          str(folder / "config.yaml"), "--quiet"])
+    chosen = yaml.safe_load((out / "chosen.yaml").read_text())["effect"]
+    with xr.open_dataset(out / "loop.nc") as ds:
+        candidates = json.loads(ds.attrs["candidates_json"])
+        plain = float(np.sqrt(np.mean((ds["measured"].values - ds["plain_prediction"].values) ** 2)))
+    return (None if chosen == "none" else chosen), candidates, plain
