@@ -11,6 +11,8 @@ import math
 import numpy as np
 from numba import njit
 
+from . import params as P
+from .integrate import in_domain
 from .jit import NO_NRT
 
 
@@ -25,19 +27,31 @@ def mass_properties(x, y, r, rho, thick):
 
 
 @njit(**NO_NRT)
-def place_pebbles(kin, balls, clumps):
-    """Pebble position/velocity from the rigid motion of their clump."""
+def place_pebbles(prm, kin, balls, clumps):
+    """Pebble position/velocity from the rigid motion of their clump. Returns True if a
+    pebble may have tripped a guard (then ``integrate.guards`` says which)."""
     offset = balls.offset
     cpos = clumps.pos
     cvel = clumps.vel
     comega = clumps.omega
     ctheta = clumps.theta
+    x0 = prm[P.XMIN]
+    y0 = prm[P.YMIN]
+    x1 = prm[P.XMAX]
+    y1 = prm[P.YMAX]
+    vmax2 = prm[P.VMAX] * prm[P.VMAX]
+    suspect = False
+    last = -1                      # a clump's pebbles mostly follow each other: its
+    cs = 1.0                       # rotation is computed once per run of them
+    sn = 0.0
     for i in range(kin.shape[0]):
         c = balls.clump[i]
         if c < 0 or not balls.alive[i]:
             continue
-        cs = math.cos(ctheta[c])
-        sn = math.sin(ctheta[c])
+        if c != last:
+            cs = math.cos(ctheta[c])
+            sn = math.sin(ctheta[c])
+            last = c
         ox = cs * offset[i, 0] - sn * offset[i, 1]
         oy = sn * offset[i, 0] + cs * offset[i, 1]
         kin[i, 0] = cpos[c, 0] + ox
@@ -45,6 +59,9 @@ def place_pebbles(kin, balls, clumps):
         kin[i, 2] = cvel[c, 0] - comega[c] * oy
         kin[i, 3] = cvel[c, 1] + comega[c] * ox
         kin[i, 4] = comega[c]
+        if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
+            suspect = True
+    return suspect
 
 
 @njit(**NO_NRT)

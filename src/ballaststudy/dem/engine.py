@@ -96,7 +96,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         prm[P.WALL_TRAVEL] += move_walls(walls.seg, walls.vel, walls.omega, walls.centre, dt)
         d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps)
         if has_clumps:
-            place_pebbles(kin, balls, clumps)
+            place_pebbles(prm, kin, balls, clumps)
             d1, d2, near_wall = pebbles_moved(prm, kin, fa, balls, d1, d2, near_wall)
         if nfree > 0:       # next step's common shift: this step's mean displacement
             prm[P.SHIFT_X] = sx / nfree
@@ -122,8 +122,8 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         if has_clumps:
             gather_clumps(prm[P.GX], prm[P.GY], kin, fa, balls, clumps)
             run.eacc[P.E_LOCAL] += clumps_damp_kick(clumps, 0.5 * dt, dt)
-            place_pebbles(kin, balls, clumps)
-        st = guards(prm, kin, balls.alive, run.err) if suspect or has_clumps else P.OK
+            suspect |= place_pebbles(prm, kin, balls, clumps)
+        st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
         if st == P.OK and controlled and control_step(prm, cnt[0], clumps, walls, ctl):
             st = P.CONTROL_EVENT
