@@ -27,9 +27,10 @@ def mass_properties(x, y, r, rho, thick):
 
 
 @njit(**NO_NRT)
-def place_pebbles(prm, kin, balls, clumps):
-    """Pebble position/velocity from the rigid motion of their clump. Returns True if a
-    pebble may have tripped a guard (then ``integrate.guards`` says which)."""
+def place_pebbles(prm, kin, balls, clumps, pebbles):
+    """Position/velocity of the ``pebbles`` (their ball ids, ascending) from the rigid
+    motion of their clump. Returns True if a pebble may have tripped a guard (then
+    ``integrate.guards`` says which)."""
     offset = balls.offset
     cpos = clumps.pos
     cvel = clumps.vel
@@ -44,9 +45,9 @@ def place_pebbles(prm, kin, balls, clumps):
     last = -1                      # a clump's pebbles mostly follow each other: its
     cs = 1.0                       # rotation is computed once per run of them
     sn = 0.0
-    for i in range(kin.shape[0]):
+    for i in pebbles:
         c = balls.clump[i]
-        if c < 0 or not balls.alive[i]:
+        if not balls.alive[i]:
             continue
         if c != last:
             cs = math.cos(ctheta[c])
@@ -65,8 +66,9 @@ def place_pebbles(prm, kin, balls, clumps):
 
 
 @njit(**NO_NRT)
-def gather_clumps(gx, gy, kin, fa, balls, clumps):
-    """Clump force = weight + sum of pebble forces; moment about the centre of mass."""
+def gather_clumps(gx, gy, kin, fa, balls, clumps, pebbles):
+    """Clump force = weight + sum of its pebbles' forces (``pebbles``: their ball ids,
+    ascending); moment about the centre of mass."""
     cpos = clumps.pos
     cmass = clumps.mass
     cforce = clumps.force
@@ -75,9 +77,9 @@ def gather_clumps(gx, gy, kin, fa, balls, clumps):
         cforce[c, 0] = cmass[c] * gx
         cforce[c, 1] = cmass[c] * gy
         cmoment[c] = 0.0
-    for i in range(kin.shape[0]):
+    for i in pebbles:
         c = balls.clump[i]
-        if c < 0 or not balls.alive[i]:
+        if not balls.alive[i]:
             continue
         cforce[c, 0] += fa[i, 0]
         cforce[c, 1] += fa[i, 1]

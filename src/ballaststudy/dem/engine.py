@@ -87,6 +87,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         fa[i, 2] = balls.moment[i]
     bond_work = bond_scratch(bonds.i.shape[0])
     has_clumps = clumps.pos.shape[0] > 0
+    pebbles = np.nonzero(balls.clump >= 0)[0]     # a clump's balls, ascending
     controlled = ctl.cfg[EVERY] > 0
     if controlled and ctl.cfg[PENDING] > 0:     # velocities an event left pending
         actuate(clumps, walls, ctl)
@@ -96,8 +97,8 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         prm[P.WALL_TRAVEL] += move_walls(walls.seg, walls.vel, walls.omega, walls.centre, dt)
         d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps)
         if has_clumps:
-            place_pebbles(prm, kin, balls, clumps)
-            d1, d2, near_wall = pebbles_moved(prm, kin, fa, balls, d1, d2, near_wall)
+            place_pebbles(prm, kin, balls, clumps, pebbles)
+            d1, d2, near_wall = pebbles_moved(prm, kin, fa, balls, pebbles, d1, d2, near_wall)
         if nfree > 0:       # next step's common shift: this step's mean displacement
             prm[P.SHIFT_X] = sx / nfree
             prm[P.SHIFT_Y] = sy / nfree
@@ -120,9 +121,9 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         wall_forces(law, run, kin, fa, walls, wp)
         suspect = second_half(prm, kin, fa, balls, run.eacc)
         if has_clumps:
-            gather_clumps(prm[P.GX], prm[P.GY], kin, fa, balls, clumps)
+            gather_clumps(prm[P.GX], prm[P.GY], kin, fa, balls, clumps, pebbles)
             run.eacc[P.E_LOCAL] += clumps_damp_kick(clumps, 0.5 * dt, dt)
-            suspect |= place_pebbles(prm, kin, balls, clumps)
+            suspect |= place_pebbles(prm, kin, balls, clumps, pebbles)
         st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
         if st == P.OK and controlled and control_step(prm, cnt[0], clumps, walls, ctl):

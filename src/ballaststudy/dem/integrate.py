@@ -156,14 +156,14 @@ def clumps_kick_drift(clumps, h, dt):
 
 
 @njit(**NO_NRT)
-def pebbles_moved(prm, kin, fa, balls, d1, d2, near_wall):
+def pebbles_moved(prm, kin, fa, balls, pebbles, d1, d2, near_wall):
     """After ``place_pebbles``: the same list check and force reset (external load only:
-    the clump carries the weight) for pebbles."""
+    the clump carries the weight) for the ``pebbles`` (ball ids)."""
     cx = prm[P.SHIFT_X]
     cy = prm[P.SHIFT_Y]
     wt = prm[P.WALL_TRAVEL]
-    for i in range(kin.shape[0]):
-        if balls.clump[i] >= 0 and balls.alive[i]:
+    for i in pebbles:
+        if balls.alive[i]:
             d1, d2, near_wall = _moved(i, kin, fa, balls, cx, cy, wt, 0.0, 0.0, d1, d2,
                                        near_wall)
     return d1, d2, near_wall
