@@ -193,6 +193,29 @@ def test_cache_reuses_rigid_stones_and_rebuilds_deformed_ones():
     assert cache.builds == n + 1
 
 
+
+def test_cache_moves_the_solid_of_a_stone_cut_by_the_plate_level():
+    """A stone crossing the plate level is cut from its kept polygon moved by the fitted
+    rigid motion: the same areas as solids built anew, within the polygons' round-off."""
+    from ballaststudy.metrics.void_ratio import SolidCache
+    pos, rad, bi, bj = packed_stones(overlap=0.0)
+    intact = np.ones(len(bi), bool)
+    n, lab = fragments(len(rad), bi, bj, intact)
+    top = float(np.median(pos[:, 1]))           # cuts a row of stones
+    box = (-1.0, 1.0, -1.0, top)
+    cache = SolidCache(tolerance=1e-6)
+    void_ratio(pos, rad, lab, n, bi, bj, intact, *box, cache=cache)
+    built = cache.builds                        # the stones below or across the level
+    th = 0.02                                   # the packing turned a little and lowered
+    rot = np.array([[np.cos(th), np.sin(th)], [-np.sin(th), np.cos(th)]])
+    moved = (pos - pos.mean(0)) @ rot + pos.mean(0) + [0.003, -0.004]
+    reused = void_ratio(moved, rad, lab, n, bi, bj, intact, *box, cache=cache)
+    assert 0 < built < n and cache.hits == built      # every stone seen before: reused
+    fresh = void_ratio(moved, rad, lab, n, bi, bj, intact, *box)
+    cut = void_ratio(moved, rad, lab, n, bi, bj, intact, -1.0, 1.0, -1.0, 1.0)
+    assert fresh["area_solid"] < 0.9 * cut["area_solid"]     # the level cuts stones indeed
+    assert reused["area_solid"] == pytest.approx(fresh["area_solid"], rel=1e-9)
+
 def test_lens_and_cut_disk_against_polygons():
     import shapely
     from ballaststudy.metrics.void_ratio import _disk_area_below, _lens

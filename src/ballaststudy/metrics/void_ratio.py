@@ -38,14 +38,17 @@ plate level minus the lens of every overlapping pair.
 Disks in a fragment's solid are polygons with 4 * quad_segs sides (shapely), which
 under-estimates a disk's area by about (2 pi / (4 q))^2 / 6 (0.16 % for q = 16).
 
-``SolidCache``: a fragment's solid area is reused while the same balls and bonds make the
+``SolidCache``: a fragment's solid is reused while the same balls and bonds make the
 fragment and they moved rigidly (least-squares rigid fit, largest residual below a
 tolerance): a stone deforms by micrometres under load, so its area is unchanged to
-~1e-4, and building the polygons is most of the cost. The rig clears it at checkpoints,
+~1e-4, and building the polygons is most of the cost. A stone inside the region counts
+with the area kept; one crossing the plate level with the kept polygon moved by the
+fitted rigid motion, then cut. The rig clears it at checkpoints,
 so a resumed run computes the same numbers as one that never stopped.
 """
 import numpy as np
 import shapely
+import shapely.affinity
 from scipy.spatial import cKDTree
 
 
@@ -74,38 +77,53 @@ def stone_solid(pos, rad, bond_i, bond_j, quad_segs=16):
     return _fill_holes(shapely.union_all(parts))
 
 
-def rigid_residual(p0, p1):
-    """Largest distance between points ``p1`` and ``p0`` moved by the least-squares rigid
-    motion (2D Kabsch) that maps ``p0`` onto ``p1`` [m]."""
+def rigid_fit(p0, p1):
+    """The least-squares rigid motion (2D Kabsch) mapping points ``p0`` onto ``p1``:
+    (shapely affine matrix [a, b, d, e, xoff, yoff], largest residual distance [m])."""
     c0, c1 = p0.mean(axis=0), p1.mean(axis=0)
     a, b = p0 - c0, p1 - c1
     th = np.arctan2((a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum(), (a * b).sum())
     c, s = np.cos(th), np.sin(th)
     moved = np.column_stack([c * a[:, 0] - s * a[:, 1], s * a[:, 0] + c * a[:, 1]])
-    return float(np.sqrt(((moved - b) ** 2).sum(axis=1)).max())
+    residual = float(np.sqrt(((moved - b) ** 2).sum(axis=1)).max())
+    matrix = [c, -s, s, c, c1[0] - (c * c0[0] - s * c0[1]), c1[1] - (s * c0[0] + c * c0[1])]
+    return matrix, residual
 
 
 class SolidCache:
-    """Solid areas of fragments, kept while they move rigidly (see the module text)."""
+    """Solids of fragments, kept while they move rigidly (see the module text): the area
+    as it is, the polygon moved with the stone (for a stone crossing the region's edge)."""
 
     def __init__(self, tolerance):
         self.tolerance = float(tolerance)      # [m] largest rigid-fit residual
-        self.entries = {}                      # key -> (ball positions, solid area)
+        self.entries = {}                      # key -> (ball positions, solid polygon, area)
         self.hits = self.builds = 0
 
     def clear(self):
         self.entries.clear()
 
-    def area(self, members, pos, rad, bi, bj, quad_segs):
+    def _lookup(self, members, pos, rad, bi, bj, quad_segs):
+        """(entry, rigid motion since it was built or None if just built)."""
         key = (members.tobytes(), bi.tobytes(), bj.tobytes())
         hit = self.entries.get(key)
-        if hit is not None and rigid_residual(hit[0], pos) <= self.tolerance:
-            self.hits += 1
-            return hit[1]
+        if hit is not None:
+            matrix, residual = rigid_fit(hit[0], pos)
+            if residual <= self.tolerance:
+                self.hits += 1
+                return hit, matrix
         self.builds += 1
-        area = stone_solid(pos, rad, bi, bj, quad_segs).area
-        self.entries[key] = (pos.copy(), area)
-        return area
+        polygon = stone_solid(pos, rad, bi, bj, quad_segs)
+        self.entries[key] = (pos.copy(), polygon, polygon.area)
+        return self.entries[key], None
+
+    def solid(self, members, pos, rad, bi, bj, quad_segs):
+        """The fragment's solid polygon now (``stone_solid``)."""
+        (_, polygon, _), matrix = self._lookup(members, pos, rad, bi, bj, quad_segs)
+        return polygon if matrix is None else shapely.affinity.affine_transform(polygon, matrix)
+
+    def area(self, members, pos, rad, bi, bj, quad_segs):
+        """The fragment's solid area (a rigid motion keeps it)."""
+        return self._lookup(members, pos, rad, bi, bj, quad_segs)[0][2]
 
 
 def _disk_area_below(y, r, y_top):
@@ -149,7 +167,9 @@ def _fragment_area(members, pos, rad, bi, bj, region, quad_segs, cache):
         return 0.0
     slack = 0.25 * r.min()          # more than any contact overlap with a container wall
     if hi[1] > y1 or lo[1] < y0 - slack or lo[0] < x0 - slack or hi[0] > x1 + slack:
-        return shapely.intersection(stone_solid(p, r, bi, bj, quad_segs), region).area
+        solid = stone_solid(p, r, bi, bj, quad_segs) if cache is None else cache.solid(
+            members, p, r, bi, bj, quad_segs)
+        return shapely.intersection(solid, region).area
     if cache is None:
         return stone_solid(p, r, bi, bj, quad_segs).area
     return cache.area(members, p, r, bi, bj, quad_segs)
