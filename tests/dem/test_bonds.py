@@ -116,3 +116,19 @@ def test_fragments_follow_intact_bonds_and_deleted_balls():
     assert sim.intact_bonds().tolist() == [False, False]
     assert sim.fragments().tolist() == [0, 1, 2, -1]
     assert sim.fragments(2).tolist() == [0, 1]
+
+
+def test_a_flat_jointed_pair_reports_no_contact_force():
+    """Two balls pressed on each other, then bonded as they are (the joint at rest): the
+    contact list has no ball-ball contact any more. The contact loop skips a bonded pair,
+    so its list entry kept the force from before the bond and reported it."""
+    fj = FlatJointMaterial(E=1e8, kappa=2.0, sigma_c=1e9, c=1e9, gap_factor=0.4)
+    sim = Simulation(gravity=(0, 0), domain=(-1, -1, 1, 1))
+    sim.add_balls([0.0, 2 * R - 1e-4], [0.0, 0.0], [R, R], RHO, stone_id=0)
+    sim.set_ball_velocity([0, 1], vel=(0.0, 0.0), omega=0.0, hold=7)
+    sim.run(5)
+    assert (sim.contact_list()["j"] >= 0).sum() == 1          # pressed: a contact force
+    assert sim.install_flat_joints(fj) == 1
+    sim.run(5)
+    assert (sim.contact_list()["j"] >= 0).sum() == 0
+    assert sim.bonds.active[0] == 1 and sim.bonds.fn[0].sum() == 0.0

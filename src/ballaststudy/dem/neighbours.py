@@ -242,7 +242,13 @@ def rebuild(prm, balls, pr, wp, bonds, seg):
     for k in range(cnt):
         pr.i[k] = new_i[k]
         pr.j[k] = new_j[k]
-        pr.bond[k] = find_bond(bonds.i, bonds.j, new_i[k], new_j[k]) if nb > 0 else -1
+        b = find_bond(bonds.i, bonds.j, new_i[k], new_j[k]) if nb > 0 else -1
+        pr.bond[k] = b
+        if b >= 0 and bonds.active[b]:
+            # the contact loop skips a flat-jointed pair: no contact force (the entry's
+            # fn/fs held another pair's, or the pair's from before it was bonded)
+            pr.fn[k] = 0.0
+            pr.fs[k] = 0.0
     pr.n[0] = cnt
     old_wh = wp.hist[:wn_old].copy()
     merge_history(wp.i, wp.s, old_wh, wn_old, nw_i, nw_s, wcnt, wp.hist, pos.shape[0])
