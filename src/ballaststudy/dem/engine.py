@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from . import params as P
-from .bonds import bond_forces
+from .bonds import bond_forces, bond_scratch
 from .clumps import gather_clumps, place_pebbles
 from .contacts import pack_kinematics, pair_forces
 from .control import EVERY, PENDING, actuate, control_step
@@ -85,6 +85,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         fa[i, 0] = balls.force[i, 0]
         fa[i, 1] = balls.force[i, 1]
         fa[i, 2] = balls.moment[i]
+    bond_work = bond_scratch(bonds.i.shape[0])
     has_clumps = clumps.pos.shape[0] > 0
     pebbles = np.nonzero(balls.clump >= 0)[0]     # a clump's balls, ascending
     controlled = ctl.cfg[EVERY] > 0
@@ -116,7 +117,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         prm[P.TIME] += dt
         pair_forces(law, run, kin, fa, pr, bonds.active)
         if bonds.i.shape[0] > 0:
-            bond_forces(run, kin, balls, fa, bonds, log)
+            bond_forces(run, kin, balls, fa, bonds, log, bond_work)
         wall_forces(law, run, kin, fa, walls, wp)
         suspect = second_half(prm, kin, fa, balls, run.eacc)
         if has_clumps:
