@@ -61,7 +61,7 @@ def _strip_sq(gc, th, a, b, compressed_only):
     return fb - fa
 
 
-# Per-active-bond scratch rows of the three passes of ``bond_forces`` (run_steps owns the
+# Per-bond scratch rows of the three passes of ``bond_forces`` (run_steps owns the
 # array: ``bond_scratch``): the contact frame from the geometry pass, the element totals
 # from the element pass.
 G_D, G_NX, G_NY, G_VT, G_AI, T_FN, T_FS, T_MC = range(8)
@@ -77,14 +77,14 @@ def bond_scratch(n_bonds):
 @njit(**LOOP)
 def bond_forces(run, kin, balls, fa, bonds, log, scratch):
     """Flat-joint forces, element failure (logged) and interface removal, in three passes
-    over the active bonds (geometry, elements, forces onto the balls): ``g`` (from
-    ``bond_scratch``) carries each bond's frame and totals between them.
+    over the active bonds (geometry, elements, forces onto the balls): the rows ``g`` of
+    ``scratch`` (``bond_scratch``) carry each bond's frame and totals between them.
 
     Why so (measured on the thesis-resolution box case, 1619 bonds): the fused loop was
     bound by the divider (a square root and six divisions per bond); one reciprocal per
     bond, the failure tests multiplied through by the element area instead of dividing
-    (sigma >= sigma_c as F_n >= sigma_c A_e), and the split passes cut it from ~30 to
-    ~22 us per step. Each pass runs over the bond index itself: an indirect list of the
+    (sigma >= sigma_c as F_n >= sigma_c A_e), and the split passes cut it from 31 to
+    24 us per step. Each pass runs over the bond index itself: an indirect list of the
     active bonds was slower (every bond array then needs its own index arithmetic)."""
     g, full = scratch
     _bond_geometry(run.prm[P.DT], kin, balls.rad, bonds, g)
@@ -131,7 +131,7 @@ def _bond_elements(run, bonds, g, full):
     stay so takes the lean path below; the others (a broken element, a failure in this
     step) are listed in ``full`` (returns their count) for ``_bond_elements_in_full``,
     which takes them in bond order (so the log and the energy sums keep their order).
-    Calls in the lean loop made it ~2x slower."""
+    Calls (to the rare paths) in the lean loop made it ~1.6x slower."""
     b_active, rbar, d0 = bonds.active, bonds.rbar, bonds.d0
     kn, ks, sigc, coh, tanphi = bonds.kn, bonds.ks, bonds.sigc, bonds.coh, bonds.tanphi
     theta, bmom, state, bfn, bfs = bonds.theta, bonds.moment, bonds.state, bonds.fn, bonds.fs
