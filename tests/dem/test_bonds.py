@@ -3,6 +3,7 @@ and a bonded chain cantilever vs the discrete beam formula."""
 import math
 
 import numpy as np
+import pytest
 
 from ballaststudy.dem import FlatJointMaterial, Simulation
 
@@ -132,3 +133,54 @@ def test_a_flat_jointed_pair_reports_no_contact_force():
     sim.run(5)
     assert (sim.contact_list()["j"] >= 0).sum() == 0
     assert sim.bonds.active[0] == 1 and sim.bonds.fn[0].sum() == 0.0
+
+
+def _listed(sim):
+    n = sim.pairs.n[0]
+    return list(zip(sim.pairs.i[:n].tolist(), sim.pairs.j[:n].tolist()))
+
+
+def test_a_removed_joint_becomes_a_contact_at_the_next_step():
+    """The Verlet list leaves flat-jointed pairs out (the joint replaces the contact); the
+    step after the interface is removed the pair is listed again, and pressed back together
+    it carries the same contact force as a pair that was never bonded (same overlap)."""
+    fj = FlatJointMaterial(E=1e8, sigma_c=1e5, c=1e9, gap_factor=0.1)
+    sim = pair(fj)
+    sim.run(2)
+    assert _listed(sim) == []
+    sim.set_ball_velocity(1, vel=(0.05, 0.0))
+    sim.run(200_000, callback=lambda s: s.bonds.active[0] == 0, every=1)
+    assert sim.bonds.active[0] == 0 and sim.n_breakages == 1
+    sim.run(1)
+    assert _listed(sim) == [(0, 1)]
+    sim.set_ball_velocity(1, vel=(-0.05, 0.0))
+    sim.run(200_000, callback=lambda s: s.balls.pos[1, 0] < 2 * R - 1e-5, every=1)
+    fresh = Simulation(gravity=(0, 0), domain=(-1, -1, 1, 1))
+    fresh.add_balls(sim.balls.pos[:, 0].copy(), [0.0, 0.0], [R, R], RHO, stone_id=0)
+    fresh.set_ball_velocity([0, 1], vel=(0.0, 0.0), omega=0.0, hold=7)
+    fresh.run(1)
+    cl = sim.contact_list()
+    assert (cl["j"] >= 0).sum() == 1 and cl["fx"][0] > 0          # j pushed away from i
+    assert abs(sim.pairs.fn[0] - fresh.pairs.fn[0]) <= 1e-9 * fresh.pairs.fn[0]
+
+
+def test_critical_timestep_counts_the_contact_springs_of_a_flat_jointed_pair():
+    """Density scaling raises each inertial mass to k_tr (dt/f)^2, so 1/(minv (dt/f)^2)
+    reads k_tr back: for a bonded pair it is the contact's (as in an unbonded twin: the
+    list leaves the bonded pair out, the timestep must not) plus the joint's (k_n + k_s) A."""
+    fj = FlatJointMaterial(E=1e8, kappa=2.0, sigma_c=1e9, c=1e9)
+    dt = 1e-3
+    k_tr = []
+    for bonded in (False, True):
+        sim = Simulation(gravity=(0, 0), domain=(-1, -1, 1, 1), dt=dt, dt_safety=0.8,
+                         density_scaling=True)
+        sim.add_balls([0.0, 2 * R - 1e-6], [0.0, 0.0], [R, R], RHO, stone_id=0)
+        if bonded:
+            assert sim.install_flat_joints(fj) == 1
+        sim.run(1)
+        s2 = (dt / 0.8) ** 2
+        k_tr.append(1.0 / (sim.balls.minv[0] * s2))
+    bd = sim.bonds
+    joint = (bd.kn[0] + bd.ks[0]) * 2 * bd.rbar[0] * sim.thickness
+    assert k_tr[1] == pytest.approx(k_tr[0] + joint, rel=1e-9)
+    assert k_tr[0] > 0.1 * joint          # the contact's share is not negligible here

@@ -219,6 +219,7 @@ def _bond_elements_in_full(run, kin, balls, bonds, log, g, full, n_full):
             mc += knt * i1
         if nbonded == 0 and gc - abs(th) * rbar[b] > gi[b]:
             b_active[b] = 0       # surfaces apart beyond the installation gap: remove
+            run.cnt[2] = 1        # rebuild next step: the pair enters the contact list
             for e in range(ne):
                 bfn[b, e] = 0.0
                 bfs[b, e] = 0.0

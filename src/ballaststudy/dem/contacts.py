@@ -93,7 +93,7 @@ def pair_forces(law, run, kin, fa, pr, b_active):
         if bonds:
             b = p_bond[p]
             if b >= 0 and b_active[b]:
-                continue                  # a flat joint replaces the contact
+                continue     # a flat joint replaces the contact (lists from older checkpoints)
         i = p_i[p]
         j = p_j[p]
         c, ma, mb = cached_row(coef, c, ma, mb, int(kin[i, 7]), int(kin[j, 7]))

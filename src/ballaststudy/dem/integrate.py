@@ -279,9 +279,20 @@ def guards(prm, kin, alive, err):
 
 
 @njit(cache=True, error_model="numpy")
+def _within_skin(pos, rad, i, j, skin):
+    """The Verlet list's test (neighbours.build_pairs) at the build positions ``pos``:
+    closer than r_i + r_j + skin."""
+    dx = pos[j, 0] - pos[i, 0]
+    dy = pos[j, 1] - pos[i, 1]
+    cut = rad[i] + rad[j] + skin
+    return dx * dx + dy * dy < cut * cut
+
+
+@njit(cache=True, error_model="numpy")
 def critical_dt(law, run, balls, pr, wp, wmat, bonds):
     """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) over every pair of the Verlet
-    lists (touching or about to touch: conservative until the next rebuild) and bonds;
+    lists (touching or about to touch: conservative until the next rebuild; the
+    flat-jointed pairs the list leaves out count as if in it) and bonds;
     k_tr sums k_n + k_s, k_rot sums k_s R^2 + k_r (the law's stiffnesses).
     With density scaling, inertial masses are raised to k_tr*(dt/f)^2 instead (never
     lowered below the real mass: PFC scales both ways; we only add inertia)."""
@@ -309,9 +320,22 @@ def critical_dt(law, run, balls, pr, wp, wmat, bonds):
                                        0.0, r, t)
         ktr[i] += kn + ks
         krot[i] += ks * r ** 2 + kr
+    skin = prm[P.SKIN]
     for b in range(bonds.i.shape[0]):
         if not bonds.active[b]:
             continue
+        i = bonds.i[b]
+        j = bonds.j[b]
+        if _within_skin(balls.pos0, rad, i, j, skin) and (balls.clump[i] < 0
+                                                          or balls.clump[i] != balls.clump[j]):
+            # a pair the Verlet list leaves out for its flat joint (neighbours.py): its
+            # contact springs count as in the list, ready for when the joint goes
+            kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, mat[i], mat[j]),
+                                           rad[i], rad[j], t)
+            ktr[i] += kn + ks
+            ktr[j] += kn + ks
+            krot[i] += ks * rad[i] ** 2 + kr
+            krot[j] += ks * rad[j] ** 2 + kr
         a = 2.0 * bonds.rbar[b] * t
         kn = bonds.kn[b] * a
         ks = bonds.ks[b] * a
