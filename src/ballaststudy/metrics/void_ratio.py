@@ -77,16 +77,23 @@ def stone_solid(pos, rad, bond_i, bond_j, quad_segs=16):
     return _fill_holes(shapely.union_all(parts))
 
 
-def rigid_fit(p0, p1):
-    """The least-squares rigid motion (2D Kabsch) mapping points ``p0`` onto ``p1``:
-    (shapely affine matrix [a, b, d, e, xoff, yoff], largest residual distance [m])."""
-    c0, c1 = p0.mean(axis=0), p1.mean(axis=0)
-    a, b = p0 - c0, p1 - c1
-    th = np.arctan2((a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum(), (a * b).sum())
+def rigid_fits(p0, p1, seg):
+    """The least-squares rigid motion (2D Kabsch) mapping each segment of the stacked points
+    ``p0`` onto the same rows of ``p1`` (``seg``: the segments' first rows, ascending, none
+    empty): (shapely affine matrices [a, b, d, e, xoff, yoff] (k, 6), largest residual
+    distance per segment [m])."""
+    n = np.diff(np.append(seg, len(p0)))
+    of = np.repeat(np.arange(len(seg)), n)
+    c0 = np.add.reduceat(p0, seg) / n[:, None]
+    c1 = np.add.reduceat(p1, seg) / n[:, None]
+    a, b = p0 - c0[of], p1 - c1[of]
+    th = np.arctan2(np.add.reduceat(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], seg),
+                    np.add.reduceat((a * b).sum(axis=1), seg))
     c, s = np.cos(th), np.sin(th)
-    moved = np.column_stack([c * a[:, 0] - s * a[:, 1], s * a[:, 0] + c * a[:, 1]])
-    residual = float(np.sqrt(((moved - b) ** 2).sum(axis=1)).max())
-    matrix = [c, -s, s, c, c1[0] - (c * c0[0] - s * c0[1]), c1[1] - (s * c0[0] + c * c0[1])]
+    moved = np.column_stack([c[of] * a[:, 0] - s[of] * a[:, 1], s[of] * a[:, 0] + c[of] * a[:, 1]])
+    residual = np.maximum.reduceat(np.sqrt(((moved - b) ** 2).sum(axis=1)), seg)
+    matrix = np.column_stack([c, -s, s, c, c1[:, 0] - (c * c0[:, 0] - s * c0[:, 1]),
+                              c1[:, 1] - (s * c0[:, 0] + c * c0[:, 1])])
     return matrix, residual
 
 
@@ -102,28 +109,30 @@ class SolidCache:
     def clear(self):
         self.entries.clear()
 
-    def _lookup(self, members, pos, rad, bi, bj, quad_segs):
-        """(entry, rigid motion since it was built or None if just built)."""
-        key = (members.tobytes(), bi.tobytes(), bj.tobytes())
-        hit = self.entries.get(key)
-        if hit is not None:
-            matrix, residual = rigid_fit(hit[0], pos)
-            if residual <= self.tolerance:
+    def lookup(self, frags, build):
+        """One (entry, rigid motion since it was built, or None if built now) per fragment of
+        ``frags`` = [(key, current ball positions)]; ``build(k)`` makes the k-th one's solid.
+        The rigid fits of all kept fragments in one vectorised pass (per-fragment numpy calls
+        cost more than the fits)."""
+        kept = [k for k, (key, _) in enumerate(frags) if key in self.entries]
+        fits = {}
+        if kept:
+            p0 = [self.entries[frags[k][0]][0] for k in kept]
+            seg = np.cumsum([0] + [len(q) for q in p0[:-1]])
+            matrix, residual = rigid_fits(np.concatenate(p0),
+                                          np.concatenate([frags[k][1] for k in kept]), seg)
+            fits = {k: m for k, m, r in zip(kept, matrix, residual) if r <= self.tolerance}
+        out = []
+        for k, (key, pos) in enumerate(frags):
+            if k in fits:
                 self.hits += 1
-                return hit, matrix
-        self.builds += 1
-        polygon = stone_solid(pos, rad, bi, bj, quad_segs)
-        self.entries[key] = (pos.copy(), polygon, polygon.area)
-        return self.entries[key], None
-
-    def solid(self, members, pos, rad, bi, bj, quad_segs):
-        """The fragment's solid polygon now (``stone_solid``)."""
-        (_, polygon, _), matrix = self._lookup(members, pos, rad, bi, bj, quad_segs)
-        return polygon if matrix is None else shapely.affinity.affine_transform(polygon, matrix)
-
-    def area(self, members, pos, rad, bi, bj, quad_segs):
-        """The fragment's solid area (a rigid motion keeps it)."""
-        return self._lookup(members, pos, rad, bi, bj, quad_segs)[0][2]
+                out.append((self.entries[key], list(fits[k])))
+                continue
+            self.builds += 1
+            polygon = build(k)
+            self.entries[key] = (pos.copy(), polygon, polygon.area)
+            out.append((self.entries[key], None))
+        return out
 
 
 def _disk_area_below(y, r, y_top):
@@ -158,21 +167,36 @@ def _overlaps(pos, rad, y_top):
     return i, j, _lens(d, rad[i], rad[j])
 
 
-def _fragment_area(members, pos, rad, bi, bj, region, quad_segs, cache):
-    """Solid area of one fragment inside the region."""
-    p, r = pos[members], rad[members]
+def _solid_area(ids, p, r, seg, bonds, region, quad_segs, cache):
+    """Solid area inside the region of the fragments whose balls (ids ``ids``, positions
+    ``p``, radii ``r``) are the segments ``seg`` (first rows, ascending, none empty);
+    ``bonds[f]``: fragment f's intact bonds (i, j) in local ball ids."""
     x0, y0, x1, y1 = region.bounds
-    lo, hi = (p - r[:, None]).min(axis=0), (p + r[:, None]).max(axis=0)
-    if lo[1] >= y1 or hi[1] <= y0 or lo[0] >= x1 or hi[0] <= x0:
-        return 0.0
-    slack = 0.25 * r.min()          # more than any contact overlap with a container wall
-    if hi[1] > y1 or lo[1] < y0 - slack or lo[0] < x0 - slack or hi[0] > x1 + slack:
-        solid = stone_solid(p, r, bi, bj, quad_segs) if cache is None else cache.solid(
-            members, p, r, bi, bj, quad_segs)
-        return shapely.intersection(solid, region).area
+    lo = np.minimum.reduceat(p - r[:, None], seg)
+    hi = np.maximum.reduceat(p + r[:, None], seg)
+    slack = 0.25 * np.minimum.reduceat(r, seg)   # more than any contact overlap with a wall
+    inside = ~((lo[:, 1] >= y1) | (hi[:, 1] <= y0) | (lo[:, 0] >= x1) | (hi[:, 0] <= x0))
+    cut = (hi[:, 1] > y1) | (lo[:, 1] < y0 - slack) | (lo[:, 0] < x0 - slack) | (hi[:, 0] > x1 + slack)
+    ends = np.append(seg[1:], len(p))
+    frags = np.nonzero(inside)[0]
+
+    def solid(f):
+        return stone_solid(p[seg[f]:ends[f]], r[seg[f]:ends[f]], *bonds[f], quad_segs)
     if cache is None:
-        return stone_solid(p, r, bi, bj, quad_segs).area
-    return cache.area(members, p, r, bi, bj, quad_segs)
+        found = [((None, sol, sol.area), None) for sol in map(solid, frags)]
+    else:
+        found = cache.lookup([((ids[seg[f]:ends[f]].tobytes(), bonds[f][0].tobytes(),
+                                bonds[f][1].tobytes()), p[seg[f]:ends[f]]) for f in frags],
+                             lambda k: solid(frags[k]))
+    total = 0.0
+    for f, ((_, polygon, area), matrix) in zip(frags, found):
+        if not cut[f]:
+            total += area
+            continue
+        if matrix is not None:
+            polygon = shapely.affinity.affine_transform(polygon, matrix)
+        total += shapely.intersection(polygon, region).area
+    return total
 
 
 def void_ratio(pos, rad, labels, n_fragments, bond_i, bond_j, bond_intact,
@@ -211,13 +235,12 @@ def void_ratio(pos, rad, labels, n_fragments, bond_i, bond_j, bond_intact,
     bond_order = np.argsort(bond_frag, kind="stable")
     bstarts = np.searchsorted(bond_frag[bond_order], np.arange(n_fragments + 1))
     local = np.empty(labels.size, dtype=np.int64)
-    a_solid = 0.0
-    for f in range(n_fragments):
-        members = order[starts[f]:starts[f + 1]]
-        local[members] = np.arange(members.size)
-        b = bond_order[bstarts[f]:bstarts[f + 1]]
-        a_solid += _fragment_area(members, pos, rad, local[bi[b]], local[bj[b]], region,
-                                  quad_segs, cache)
+    local[order] = np.arange(order.size) - starts[labels[order]]
+    li, lj = local[bi[bond_order]], local[bj[bond_order]]
+    present = np.nonzero(np.diff(starts) > 0)[0]      # fragments with a ballast ball
+    bonds = [(li[bstarts[f]:bstarts[f + 1]], lj[bstarts[f]:bstarts[f + 1]]) for f in present]
+    a_solid = _solid_area(order, pos[order], rad[order], starts[present], bonds, region,
+                          quad_segs, cache) if present.size else 0.0
     i, j, lens = _overlaps(pos[ball_ids], rad[ball_ids], y_top)
     lab = labels[ball_ids]
     a_solid -= lens[lab[i] != lab[j]].sum()
