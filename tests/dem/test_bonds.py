@@ -184,3 +184,40 @@ def test_critical_timestep_counts_the_contact_springs_of_a_flat_jointed_pair():
     joint = (bd.kn[0] + bd.ks[0]) * 2 * bd.rbar[0] * sim.thickness
     assert k_tr[1] == pytest.approx(k_tr[0] + joint, rel=1e-9)
     assert k_tr[0] > 0.1 * joint          # the contact's share is not negligible here
+
+
+def _three_bonded_pairs():
+    """Stones 0, 1, 2 of two balls each (bonds 0, 1, 2); stone 2 pulled until it breaks."""
+    sim = Simulation(gravity=(0, 0), domain=(-1, -1, 1, 1))
+    x = [0.0, 2 * R, 0.1, 0.1 + 2 * R, 0.2, 0.2 + 2 * R]
+    sim.add_balls(x, [0.0] * 6, [R] * 6, RHO, stone_id=[0, 0, 1, 1, 2, 2])
+    assert sim.install_flat_joints(FlatJointMaterial(sigma_c=1e5)) == 3
+    sim.set_ball_velocity([2, 3, 4, 5], vel=(0.0, 0.0), omega=0.0, hold=7)
+    sim.set_ball_velocity(5, vel=(2e-3, 0.0))
+    sim.run(200_000, callback=lambda s: s.log.n[0] > 0, every=1)
+    assert sim.breakages()["bond"].tolist() == [2]
+    return sim
+
+
+def test_dropping_deleted_balls_bonds_changes_nothing_but_the_indices():
+    """The bonds of deleted balls taken out of the arrays: the others keep their order and
+    values, the breakage log points at the same bond under its new index (-1 once it is
+    taken out too), and the run goes on bit for bit as with the bonds left in."""
+    kept, dropped = _three_bonded_pairs(), _three_bonded_pairs()
+    for sim in (kept, dropped):
+        sim.delete_balls([0])
+        sim.set_ball_velocity(1, vel=(1e-3, 1e-3))
+    before = {k: v.copy() for k, v in dropped.bond_list().items()}
+    assert dropped.drop_deleted_bonds() == 1
+    after = dropped.bond_list()
+    for k in before:
+        np.testing.assert_array_equal(after[k], before[k][1:])
+    log = dropped.breakages()
+    assert log["bond"].tolist() == [1] and dropped.bonds.i[1] == log["i"][0] == 4
+    for sim in (kept, dropped):
+        sim.run(500)
+    np.testing.assert_array_equal(kept.balls.pos, dropped.balls.pos)
+    np.testing.assert_array_equal(kept.bonds.fn[1:], dropped.bonds.fn)
+    dropped.delete_balls([5])
+    assert dropped.drop_deleted_bonds() == 1 and dropped.breakages()["bond"].tolist() == [-1]
+    assert dropped.drop_deleted_bonds() == 0

@@ -33,6 +33,8 @@ def test_specimen(specimen):
     assert 0.25 < rig.height() <= 0.30 + 1e-9
     assert np.all(b.pos[ids, 1] + b.rad[ids] <= rig.height() + 1e-3)
     assert rig.sim.n_breakages == 0
+    bd = rig.sim.bonds                        # the cuts' bonds are out of the bond loops
+    assert np.all(b.alive[bd.i] & b.alive[bd.j])
 
 
 def test_consolidation_reaches_p(specimen):

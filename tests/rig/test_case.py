@@ -26,6 +26,8 @@ def test_assembly(assembled, small_params):
     assert rig.sim.walls.seg[lay.left_low, 0] == pytest.approx(-w2, abs=1e-6)
     assert rig.sim.walls.seg[lay.right_low, 0] == pytest.approx(w2, abs=1e-6)
     assert rig.sim.n_breakages == 0, "bonds broke during the (strengthened) assembly"
+    bd = rig.sim.bonds                        # the cuts' bonds are out of the bond loops
+    assert np.all(b.alive[bd.i] & b.alive[bd.j])
     # frictionless while dropping and tamping, Table 4.2's friction everywhere afterwards
     assert small_params.assembly_friction == 0.0
     assert np.all(rig.sim.contact_coefficient("mu") == pytest.approx(0.7))

@@ -10,6 +10,8 @@ Typical use (SI units)::
     sim.run(10000, callback=servo, every=100)
     sim.wall_force(bottom).sum(axis=0)
 """
+from dataclasses import fields
+
 import numpy as np
 
 from . import output
@@ -297,7 +299,8 @@ class Simulation:
         order = np.lexsort((bd.j, bd.i))
         for k in new:
             setattr(bd, k, getattr(bd, k)[order])
-        self.log.ensure(bd.state.size)
+        # every row logged so far + one per element that may still break
+        self.log.ensure(int(self.log.n[0]) + int(bd.state.sum()))
         self._touch()
         return len(new["i"])
 
@@ -312,6 +315,23 @@ class Simulation:
         bd = self.bonds
         bd.active[dead[bd.i] | dead[bd.j]] = 0
         self._touch()
+
+    def drop_deleted_bonds(self):
+        """Take the bonds of deleted balls out of the bond arrays (``delete_balls`` leaves
+        them there, inactive, and every bond loop of every later step passes over them: a
+        third of the bonds after a box assembly's cuts). Later bonds' indices shift; the
+        breakage log's are renumbered (-1: a bond taken out). Returns how many went."""
+        b, bd, log = self.balls, self.bonds, self.log
+        gone = (b.alive[bd.i] == 0) | (b.alive[bd.j] == 0)
+        if not gone.any():
+            return 0
+        index = np.where(gone, -1, np.cumsum(~gone) - 1)
+        old = log.bond[: log.n[0]]
+        log.bond[: log.n[0]] = np.where(old >= 0, index[np.maximum(old, 0)], -1)
+        for f in fields(bd):
+            setattr(bd, f.name, getattr(bd, f.name)[~gone])
+        self._touch()
+        return int(gone.sum())
 
     def scale_bond_strength(self, factor, bonds=None):
         """Multiply tensile strength and cohesion of ``bonds`` (default all) by factor."""

@@ -162,19 +162,22 @@ def settle(specimen, params, progress=None):
 
 
 def remove_debris(specimen, min_balls):
-    """Delete fragments of fewer than ``min_balls`` balls that cuts made out of larger
-    stones (loose single balls would rattle in the voids for a long time)."""
-    if min_balls <= 1:
-        return 0
+    """After a cut (``delete_balls``): delete fragments of fewer than ``min_balls`` balls
+    that it made out of larger stones (loose single balls would rattle in the voids for a
+    long time), then take the deleted balls' bonds out of the bond arrays (every bond loop
+    of every later step would pass over them). Returns the number of balls deleted here."""
     sim = specimen.sim
-    ids = specimen.stone_balls()
-    frag = specimen.fragments()
-    size = np.bincount(frag[ids])
-    stone_size = np.bincount(sim.balls.stone[ids])
-    small = size[frag[ids]] < min_balls
-    cut = stone_size[sim.balls.stone[ids]] > size[frag[ids]]     # the stone lost balls
-    gone = ids[small & cut]
-    sim.delete_balls(gone)
+    gone = np.zeros(0, np.int64)
+    if min_balls > 1:
+        ids = specimen.stone_balls()
+        frag = specimen.fragments()
+        size = np.bincount(frag[ids])
+        stone_size = np.bincount(sim.balls.stone[ids])
+        small = size[frag[ids]] < min_balls
+        cut = stone_size[sim.balls.stone[ids]] > size[frag[ids]]     # the stone lost balls
+        gone = ids[small & cut]
+        sim.delete_balls(gone)
+    sim.drop_deleted_bonds()
     return len(gone)
 
 

@@ -69,7 +69,8 @@ def write_vtk(rig, folder, tag):
     state = np.where(allint, 0, 3)
     br = sim.breakages()
     mode_of = np.zeros(len(bd), np.int64)
-    mode_of[br["bond"]] = np.where(br["mode"] == "tension", 1, 2)
+    kept = br["bond"] >= 0                      # -1: a deleted ball's bond, taken out
+    mode_of[br["bond"][kept]] = np.where(br["mode"][kept] == "tension", 1, 2)
     state = np.where(~intact, mode_of, state)
     keep = (b.alive[bd.i] == 1) & (b.alive[bd.j] == 1)
     idx = {int(v): k for k, v in enumerate(live)}
