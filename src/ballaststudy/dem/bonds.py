@@ -126,10 +126,10 @@ def _bond_geometry(dt, kin, rad, bonds, g):
 
 @njit(**LOOP)
 def _bond_elements(run, bonds, g, full):
-    """Element forces of the active bonds, failure (logged) and interface removal; the
-    totals (F_n, F_s, moment) go to g[:, T_FN:]. A bond whose elements are all intact and
-    stay so takes the lean path below; the others (a broken element, a failure in this
-    step) are listed in ``full`` (returns their count) for ``_bond_elements_in_full``,
+    """Element forces of the active bonds whose elements are all intact and stay so (the
+    lean path): their totals (F_n, F_s, moment) go to g[:, T_FN:]. The others (a broken
+    element, a failure in this step) are listed in ``full`` (returns their count) for
+    ``_bond_elements_in_full`` (failure, logging, interface removal),
     which takes them in bond order (so the log and the energy sums keep their order).
     Calls (to the rare paths) in the lean loop made it ~1.6x slower."""
     b_active, rbar, d0 = bonds.active, bonds.rbar, bonds.d0
@@ -229,6 +229,7 @@ def _bond_elements_in_full(run, kin, balls, bonds, log, g, full, n_full):
         g[b, T_FN] = ftot_n
         g[b, T_FS] = ftot_s
         g[b, T_MC] = mc
+
 
 @njit(**LOOP)
 def _broken_element(eacc, gc, th, a, le, fs, knt, ksa, mu, e_break):

@@ -289,6 +289,16 @@ def _within_skin(pos, rad, i, j, skin):
 
 
 @njit(cache=True, error_model="numpy")
+def _add_pair_springs(law, coef, rad, mat, t, i, j, ktr, krot):
+    """A ball-ball contact's springs into k_tr and k_rot of both balls."""
+    kn, ks, kr = contact_stiffness(law, coefficient_row(coef, mat[i], mat[j]), rad[i], rad[j], t)
+    ktr[i] += kn + ks
+    ktr[j] += kn + ks
+    krot[i] += ks * rad[i] ** 2 + kr
+    krot[j] += ks * rad[j] ** 2 + kr
+
+
+@njit(cache=True, error_model="numpy")
 def critical_dt(law, run, balls, pr, wp, wmat, bonds):
     """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) over every pair of the Verlet
     lists (touching or about to touch: conservative until the next rebuild; the
@@ -305,14 +315,7 @@ def critical_dt(law, run, balls, pr, wp, wmat, bonds):
     ktr = np.zeros(n)
     krot = np.zeros(n)
     for p in range(pr.n[0]):
-        i = pr.i[p]
-        j = pr.j[p]
-        kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, mat[i], mat[j]), rad[i],
-                                       rad[j], t)
-        ktr[i] += kn + ks
-        ktr[j] += kn + ks
-        krot[i] += ks * rad[i] ** 2 + kr
-        krot[j] += ks * rad[j] ** 2 + kr
+        _add_pair_springs(law, run.coef, rad, mat, t, pr.i[p], pr.j[p], ktr, krot)
     for q in range(wp.n[0]):
         i = wp.i[q]
         r = rad[i]
@@ -330,12 +333,7 @@ def critical_dt(law, run, balls, pr, wp, wmat, bonds):
                                                           or balls.clump[i] != balls.clump[j]):
             # a pair the Verlet list leaves out for its flat joint (neighbours.py): its
             # contact springs count as in the list, ready for when the joint goes
-            kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, mat[i], mat[j]),
-                                           rad[i], rad[j], t)
-            ktr[i] += kn + ks
-            ktr[j] += kn + ks
-            krot[i] += ks * rad[i] ** 2 + kr
-            krot[j] += ks * rad[j] ** 2 + kr
+            _add_pair_springs(law, run.coef, rad, mat, t, i, j, ktr, krot)
         a = 2.0 * bonds.rbar[b] * t
         kn = bonds.kn[b] * a
         ks = bonds.ks[b] * a

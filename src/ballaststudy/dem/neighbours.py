@@ -217,21 +217,21 @@ def find_bond(bi, bj, i, j):
 
 
 @njit(cache=True, error_model="numpy")
-def _drop_flat_jointed(new_i, new_j, cnt, bonds):
+def _drop_flat_jointed(new_i, new_j, cnt, bonds, out_bond):
     """Remove the pairs held by an active flat joint from the new list (in place, order
-    kept; returns the new count). A flat joint replaces the contact, so the contact loop
-    need not visit them (in a bonded packing most pairs are bonded: 1727 of 2341 in the
-    thesis box case); the bond's removal forces a rebuild (bonds.py), which brings the
-    pair back as a contact."""
-    if bonds.i.shape[0] == 0:
-        return cnt
+    kept; returns the new count) and write each kept pair's bond (or -1) to ``out_bond``.
+    A flat joint replaces the contact, so the contact loop need not visit them (in a
+    bonded packing most pairs are bonded: 1727 of 2341 in the thesis box case); the
+    bond's removal forces a rebuild (bonds.py), which brings the pair back as a contact."""
+    nb = bonds.i.shape[0]
     m = 0
     for k in range(cnt):
-        b = find_bond(bonds.i, bonds.j, new_i[k], new_j[k])
+        b = find_bond(bonds.i, bonds.j, new_i[k], new_j[k]) if nb > 0 else -1
         if b >= 0 and bonds.active[b]:
             continue
         new_i[m] = new_i[k]
         new_j[m] = new_j[k]
+        out_bond[m] = b
         m += 1
     return m
 
@@ -256,14 +256,12 @@ def rebuild(prm, balls, pr, wp, bonds, seg):
     wcnt = build_wall_pairs(pos, balls.rad, balls.alive, seg, skin, nw_i, nw_s, balls.clear)
     if wcnt < 0:
         return 2, -wcnt
-    cnt = _drop_flat_jointed(new_i, new_j, cnt, bonds)
+    cnt = _drop_flat_jointed(new_i, new_j, cnt, bonds, pr.bond)   # merge_history reads no bond
     old_h = pr.hist[:n_old].copy()
     merge_history(pr.i, pr.j, old_h, n_old, new_i, new_j, cnt, pr.hist, pos.shape[0])
-    nb = bonds.i.shape[0]
     for k in range(cnt):
         pr.i[k] = new_i[k]
         pr.j[k] = new_j[k]
-        pr.bond[k] = find_bond(bonds.i, bonds.j, new_i[k], new_j[k]) if nb > 0 else -1
     pr.n[0] = cnt
     old_wh = wp.hist[:wn_old].copy()
     merge_history(wp.i, wp.s, old_wh, wn_old, nw_i, nw_s, wcnt, wp.hist, pos.shape[0])
