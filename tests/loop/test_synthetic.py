@@ -5,7 +5,8 @@ names the effect or its strength."""
 import numpy as np
 import yaml
 
-from ballaststudy.loop.synthetic import POINTS, PlantedTest, digitise
+from ballaststudy.loop.synthetic import (POINTS, SCENARIO_LIBRARY, SCENARIO_TESTS, PlantedTest,
+                                        digitise, library_spec)
 from ballaststudy.measured.importer import import_test, load_conditions
 
 
@@ -40,3 +41,20 @@ def test_a_planted_test_declares_conditions_only(tmp_path):
     import_test(tmp_path / "t.yaml", tmp_path / "t.nc")
     clean = PlantedTest(30.0, 10.0, 50.0, 20.0).conditions("t.dat")
     assert "covariates" not in clean
+
+
+def test_library_entries_given_replace_the_scenario_defaults():
+    """bench/loop_undeclared.py passes every library entry (it crashed on the duplicates)."""
+    spec = library_spec(dict(n_stones=40, r0=0.006))
+    assert spec == {**SCENARIO_LIBRARY, "n_stones": 40, "r0": 0.006}
+    assert library_spec() == SCENARIO_LIBRARY and SCENARIO_LIBRARY["n_stones"] == 24
+
+
+def test_every_scenario_test_is_a_condition_of_its_own():
+    """p differs from test to test (the quasi-static model sees neither f nor VCI), and f and
+    VCI are not ordered alike (rate and fouling must leave different patterns)."""
+    p = [t.confining_pressure_kPa for t in SCENARIO_TESTS]
+    f = [t.frequency_Hz for t in SCENARIO_TESTS]
+    vci = [t.VCI_percent for t in SCENARIO_TESTS]
+    assert len(set(p)) == len(SCENARIO_TESTS) >= 7
+    assert abs(np.corrcoef(np.argsort(np.argsort(f)), np.argsort(np.argsort(vci)))[0, 1]) < 0.5

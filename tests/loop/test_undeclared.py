@@ -2,21 +2,22 @@
 effect at a strength the data do not state (loop/synthetic.py), digitised like the shared
 data. The goal: the loop names that effect and cuts the held-out RMSE by at least half; on
 the plain model plus noise (the negative control) it chooses nothing and leaves the model
-unchanged. Slow (6-7.5 min on 2 cores): the five scenarios share one case cache (the
+unchanged. Slow (5-6 min on 2 cores): the five scenarios share one case cache (the
 candidates' design sets run once; each scenario adds its truth's cases).
 
-What is asserted, and why not more. At this scale (3 specimens of 24 synthetic stones, 12
-cycles, 8 tests) which planted effect is found depends on the trajectories: three flat-joint
-kernels that differ only in rounding (same physics, checked on the box case) gave
-  - landed at 7d20386: rate chosen (8/8 tests better, p 0.004, held-out RMSE -88 %), the
-    other three not (abrasion 4/8 with four ties, fouling 1/8, end restraint 0/8);
-  - three-pass kernel: nothing chosen (rate and abrasion 6/8, p 1/64 > 0.05/4);
-  - three-pass kernel, Verlet list without bonded pairs: end restraint chosen (8/8,
-    p 0.004, fitted friction 0.29 for the planted 0.2, held-out RMSE -76 %), rate 2/8.
-So the loop's sensitivity is not established here (bench/loop_undeclared.py measures it;
-issue 14 stays open for it), and the suite asserts what held in every run: the negative
-control changes nothing, and a planted effect is never mistaken for another (the loop
-chooses the planted effect or nothing, and when it chooses, the held-out RMSE halves)."""
+The negative control is asserted. The goal is not met at this scale (3 specimens of 24
+synthetic stones, 12 cycles, 8 tests), so each planted scenario is a strict xfail: it
+fails the suite the day the goal is met, to be turned into a plain assertion. Measured
+with eight distinct conditions (p differs from test to test; f and VCI not ordered alike):
+  - rate: end restraint chosen instead (8/8 better at platen friction ~0, held-out RMSE
+    -30 %); rate itself 6/8, p 0.016 > 0.05/4, held-out RMSE -55 %;
+  - abrasion: nothing chosen (1/8);
+  - fouling: nothing chosen (3/8), though its held-out RMSE is -74 %;
+  - end restraint: chosen (7/8, p 0.008, fitted 0.26 for the planted 0.2), held-out RMSE
+    -37 %, not -50 %.
+Earlier runs that "found" an effect 8/8 (sessions up to 25) had tests sharing p and q:
+for every effect but rate those were copies of two runs, and the signed-rank test counted
+two conditions as eight. bench/loop_undeclared.py measures the sensitivity."""
 from pathlib import Path
 
 import pytest
@@ -45,14 +46,18 @@ def test_negative_control_changes_nothing(scenarios):
     assert not any(c["chosen"] for c in candidates)
 
 
+GOAL_NOT_MET = pytest.mark.xfail(strict=True, raises=AssertionError,
+                                  reason="issue 14: the loop's sensitivity at this scale is not established")
+
+
 @pytest.mark.parametrize("effect", ["rate", "abrasion", "fouling", "end_restraint"])
-def test_a_planted_effect_is_never_mistaken_for_another(scenarios, effect):
+@GOAL_NOT_MET
+def test_the_planted_effect_is_named_and_halves_the_held_out_error(scenarios, effect):
     folder, specimens = scenarios
     chosen, candidates, plain = run_scenario(folder, effect, specimens, CYCLES)
     evidence = {c["effect"]: c for c in candidates}
-    assert chosen in (None, effect), evidence
-    if chosen == effect:
-        assert evidence[effect]["held_out_rmse"] <= 0.5 * plain, (evidence[effect], plain)
     print(f"{effect}: chosen {chosen}; " + "; ".join(
-        f"{c['effect']} {c['wins']}/{c['tests']} better, p {c['p']:.3g}"
-        for c in candidates))
+        f"{c['effect']} {c['wins']}/{c['tests']} better, p {c['p']:.3g}, held-out RMSE "
+        f"{c['held_out_rmse']:.3g} (plain {plain:.3g})" for c in candidates))
+    assert chosen == effect, evidence
+    assert evidence[effect]["held_out_rmse"] <= 0.5 * plain, (evidence[effect], plain)
