@@ -221,3 +221,20 @@ def test_dropping_deleted_balls_bonds_changes_nothing_but_the_indices():
     dropped.delete_balls([5])
     assert dropped.drop_deleted_bonds() == 1 and dropped.breakages()["bond"].tolist() == [-1]
     assert dropped.drop_deleted_bonds() == 0
+
+
+def test_dropping_bonds_renumbers_the_verlet_lists_bond_ids():
+    """A listed pair keeps pointing at its own bond (a removed joint's pair is in the list
+    as a contact, its bond id after the dropped one): the energies read it before any
+    rebuild."""
+    sim = _three_bonded_pairs()
+    sim.bonds.active[2] = 0            # stone 2's joint removed: its pair becomes a contact
+    sim._touch()
+    sim.run(1)
+    pr, bd = sim.pairs, sim.bonds
+    assert pr.bond[: pr.n[0]].tolist() == [2]
+    sim.delete_balls([0])
+    energy = sim.energies()
+    assert sim.drop_deleted_bonds() == 1
+    assert pr.bond[: pr.n[0]].tolist() == [1] and (bd.i[1], bd.j[1]) == (pr.i[0], pr.j[0]) == (4, 5)
+    assert sim.energies() == energy

@@ -319,15 +319,16 @@ class Simulation:
     def drop_deleted_bonds(self):
         """Take the bonds of deleted balls out of the bond arrays (``delete_balls`` leaves
         them there, inactive, and every bond loop of every later step passes over them: a
-        third of the bonds after a box assembly's cuts). Later bonds' indices shift; the
-        breakage log's are renumbered (-1: a bond taken out). Returns how many went."""
-        b, bd, log = self.balls, self.bonds, self.log
+        third of the bonds after a box assembly's cuts). Later bonds' indices shift; those
+        the breakage log and the Verlet list hold are renumbered (-1: a bond taken out).
+        Returns how many went."""
+        b, bd, log, pr = self.balls, self.bonds, self.log, self.pairs
         gone = (b.alive[bd.i] == 0) | (b.alive[bd.j] == 0)
         if not gone.any():
             return 0
         index = np.where(gone, -1, np.cumsum(~gone) - 1)
-        old = log.bond[: log.n[0]]
-        log.bond[: log.n[0]] = np.where(old >= 0, index[np.maximum(old, 0)], -1)
+        for ids in (log.bond[: log.n[0]], pr.bond[: pr.n[0]]):
+            ids[:] = np.where(ids >= 0, index[np.maximum(ids, 0)], -1)
         for f in fields(bd):
             setattr(bd, f.name, getattr(bd, f.name)[~gone])
         self._touch()
