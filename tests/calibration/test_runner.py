@@ -164,3 +164,20 @@ def test_several_targets_make_one_curve(specimen, tmp_path, fast_config, planted
     rigs = [json.loads(xr.open_dataset(f).attrs["rig_params_json"])["deviator_max_kPa"]
             for f in sorted((tmp_path / "cal" / "cases").rglob("case0.nc"))]
     assert rigs == [40.0, 80.0]
+
+
+def test_the_chaos_probe_is_a_set_of_its_own(specimen, tmp_path, fast_config, planted_conditions):
+    """The plain set run again from velocities perturbed by 1e-9 m/s (loop.select's chaos
+    probe): its own cache key (none in the plain set's context: its cached cases stay valid),
+    each case seeded by its index; the curve moves, but by chaos, not by a new specimen."""
+    from ballaststudy.calibration.runner import Evaluator
+    config, c = fast_config(tmp_path), planted_conditions(tmp_path / "t.yaml", 50.0)
+    make = lambda **kw: Evaluator([], [specimen], [(c, np.array([1.0, 2.0]))], config, 2, "axial_strain",
+                                  tmp_path / "cal", **kw)
+    plain, probe = make(), make(perturbation_m_s=1e-9)
+    key, jobs = plain.jobs_for({})
+    assert "perturbation_m_s" not in plain.context and jobs[0][0]["perturbation_m_s"] == 0.0
+    probe_key, probe_jobs = probe.jobs_for({})
+    assert probe_key != key and probe_jobs[0][0]["perturbation_seed"] == 0
+    a, b = plain(np.zeros((1, 0)))[0], probe(np.zeros((1, 0)))[0]
+    assert not np.array_equal(a, b) and np.all(np.abs(a - b) < 0.5 * np.abs(a))

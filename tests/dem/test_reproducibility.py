@@ -80,3 +80,25 @@ def test_callbacks_delete_balls_and_scale_bonds(small_model):
     assert np.all(sim.bonds.active[gone] == 0)
     c = sim.contact_list()
     assert not np.isin(c["i"], [0, 1, 2]).any() and not np.isin(c["j"], [0, 1, 2]).any()
+
+
+def test_perturbed_velocities_touch_live_free_balls_only_seeded(small_model):
+    """The chaos probe's perturbation (loop.select): each velocity component of a live free
+    ball gets a normal draw of the given sd (sample sd within 20 % over 150 components),
+    a held ball, a clump's pebble and a deleted ball keep theirs; one seed, one draw."""
+    sim = small_model(1)
+    sim.set_ball_velocity(3, hold=7)
+    sim.delete_balls([5])
+    before = sim.balls.vel.copy()
+    sim.perturb_velocities(1e-3, seed=4)
+    change = sim.balls.vel - before
+    untouched = np.zeros(len(change), bool)
+    untouched[[3, 5]] = True
+    untouched |= sim.balls.clump >= 0
+    assert untouched.sum() == 4 and np.all(change[untouched] == 0)
+    assert np.all(change[~untouched] != 0) and abs(change[~untouched].std() / 1e-3 - 1) < 0.2
+    again = small_model(1)
+    again.set_ball_velocity(3, hold=7)
+    again.delete_balls([5])
+    again.perturb_velocities(1e-3, seed=4)
+    assert np.array_equal(again.balls.vel, sim.balls.vel)

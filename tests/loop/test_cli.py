@@ -132,3 +132,13 @@ def test_snakefile_refuses_bad_loop_config(tmp_path, change, message):
     lines = [ln for ln in out.stderr.strip().splitlines() if not ln.startswith("note: ")]
     assert out.returncode == 2 and len(lines) == 1, out.stderr
     assert message in lines[0], lines[0]
+
+
+def test_a_one_parameter_design_runs_both_bounds():
+    """One parameter: an even grid from bound to bound (the bound where an effect is off is
+    run, the surrogate never extrapolates); more: the calibration's Latin hypercube."""
+    from ballaststudy.calibration.bayes import initial_design
+    from ballaststudy.loop.cli import design
+    np.testing.assert_allclose(design(np.array([0.0]), np.array([0.2]), 5, 1)[:, 0], [0.0, 0.05, 0.1, 0.15, 0.2])
+    np.testing.assert_array_equal(design(np.array([0.0, 1.0]), np.array([1.0, 2.0]), 4, 3),
+                                  initial_design([0.0, 1.0], [1.0, 2.0], 4, 3))

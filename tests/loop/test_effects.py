@@ -162,7 +162,8 @@ def test_abrasion_over_cycles_and_resumed_through_the_runner(setup, monkeypatch)
     _, per_test = ev.jobs_for({"wear_per_cycle": 0.05})
     job = per_test[0][0]
     assert set(job) == {"specimen", "values", "cycles", "rig", "effect", "effect_values",
-                        "metrics", "conditions", "out"}
+                        "metrics", "conditions", "out", "perturbation_m_s", "perturbation_seed"}
+    assert job["perturbation_m_s"] == 0.0
     assert job["effect"] == "abrasion" and job["values"] == base and job["cycles"] == 3
 
     records, real_hooks = [], effects.hooks             # joint strengths at every cycle end

@@ -1,13 +1,16 @@
 """Choosing the missing effect on planted models with known answers: "DEM" ensembles made
 by formula (a base curve per test, specimen offsets along the whole curve, point noise),
 three candidate effects of different shape, "measured" curves = one more specimen of the
-model with one effect at a known strength. The rule must name the planted effect and cut
-the held-out RMSE by half; with no effect planted it must choose none (negative control)."""
+model with one effect at a known strength (a lab test: specimen_share 1), or the ensemble
+mean of the model's own specimens under it (model-made data, common random numbers:
+specimen_share 0, the noise the chaos a probe measures). The rule must name the planted
+effect and cut the held-out RMSE by half; with no effect planted it must choose none
+(negative control)."""
 import numpy as np
 import pytest
 
 from ballaststudy.calibration.bayes import initial_design
-from ballaststudy.loop.select import (choose, fit_all, held_out_candidate, held_out_plain,
+from ballaststudy.loop.select import (chaos_covariance, choose, fit_all, held_out_candidate, held_out_plain,
                                       residual_covariances)
 
 TESTS = 7
@@ -26,42 +29,65 @@ def _points(rng):
     return np.concatenate(pts), np.concatenate([np.full(len(p), t) for t, p in enumerate(pts)])
 
 
-def _specimens(rng, n, point_test, effect, theta, k):
-    """k specimens' curves at the points under the model with ``effect`` at ``theta``."""
+def _specimens(rng, n, point_test, effect, theta, k, offsets=None, chaos=2e-4):
+    """k specimens' curves at the points under the model with ``effect`` at ``theta``;
+    ``offsets`` (k, TESTS) fixed specimens (common random numbers), else new ones; each run
+    adds its own point scatter of sd ``chaos``."""
+    offsets = rng.normal(0, 0.002, (k, TESTS)) if offsets is None else offsets
     out = []
-    for _ in range(k):
-        offset = rng.normal(0, 0.002, TESTS)
+    for offset in offsets:
         curve = np.empty(len(n))
         for t in range(TESTS):
             sel = point_test == t
             base = 0.01 + 0.003 * (1 + 0.1 * t) * np.log(n[sel])
             extra = EFFECTS[effect](theta, t, n[sel]) if effect else 0.0
-            curve[sel] = base + extra + offset[t] * (1 + 0.1 * np.log(n[sel])) + rng.normal(0, 2e-4, sel.sum())
+            curve[sel] = base + extra + offset[t] * (1 + 0.1 * np.log(n[sel])) + rng.normal(0, chaos, sel.sum())
         out.append(curve)
     return np.array(out)
 
 
+def _judged(thetas, runs, plain_curves, measured, point_test, noise):
+    covs, plain_covs = noise
+    held = {k: held_out_candidate(thetas, c, measured, point_test, [0.0], [1.0], covs) for k, c in runs.items()}
+    fits = {k: fit_all(thetas, c, measured, point_test, [0.0], [1.0], covs) for k, c in runs.items()}
+    plain = held_out_plain(plain_curves, measured, point_test, plain_covs)
+    chosen, evidence = choose({k: (held[k], plain) for k in runs})
+    return chosen, evidence, held, plain, fits
+
+
 def _loop(truth, seed):
+    """A lab test: the measured curve one more specimen of the model with ``truth``."""
     rng = np.random.default_rng(seed)
     n, point_test = _points(rng)
     measured = _specimens(rng, n, point_test, truth, 0.6, 1)[0] + rng.normal(0, MEAS_SD, len(n))
     plain_curves = _specimens(rng, n, point_test, None, 0.0, K)
     thetas = initial_design([0.0], [1.0], SETS, seed=seed + 1)
     runs = {name: [_specimens(rng, n, point_test, name, th[0], K) for th in thetas] for name in EFFECTS}
-    held, fits, plains = {}, {}, {}
-    for name, curves in runs.items():
-        covs = residual_covariances([plain_curves] + curves, point_test, MEAS_SD ** 2)
-        plains[name] = held_out_plain(plain_curves, measured, point_test, covs)
-        held[name] = held_out_candidate(thetas, curves, measured, point_test, [0.0], [1.0], covs)
-        fits[name] = fit_all(thetas, curves, measured, point_test, [0.0], [1.0], covs)
-    chosen, evidence = choose({k: (held[k], plains[k]) for k in runs})
-    plain = plains[next(iter(runs))]
-    return chosen, evidence, held, plain, measured, point_test, fits
+    noise = residual_covariances(plain_curves, point_test, MEAS_SD ** 2)
+    return (*_judged(thetas, runs, plain_curves, measured, point_test, noise), measured, point_test)
+
+
+def _loop_own_specimens(truth, seed, chaos=2e-4, meas_sd=2e-5, offset_sd=0.02):
+    """Model-made data: the measured curve the mean of the model's own K specimens with
+    ``truth`` (a run of its own: its own chaos draw) and every set on the same specimens.
+    With no effect the truth is the plain runs themselves, as in the DEM (same specimens,
+    same parameters: the same bytes)."""
+    rng = np.random.default_rng(seed)
+    n, point_test = _points(rng)
+    offsets = rng.normal(0, offset_sd, (K, TESTS))
+    run = lambda effect, theta: _specimens(rng, n, point_test, effect, theta, K, offsets, chaos)
+    plain_curves, probe = run(None, 0.0), run(None, 0.0)
+    truth_runs = run(truth, 0.6) if truth else plain_curves
+    measured = truth_runs.mean(axis=0) + rng.normal(0, meas_sd, len(n))
+    thetas = np.linspace(0.0, 1.0, SETS)[:, None]
+    runs = {name: [run(name, th[0]) for th in thetas] for name in EFFECTS}
+    noise = residual_covariances(plain_curves, point_test, meas_sd ** 2, specimen_share=0.0, probe=probe)
+    return (*_judged(thetas, runs, plain_curves, measured, point_test, noise), measured, point_test)
 
 
 @pytest.mark.parametrize("truth", list(EFFECTS))
 def test_the_planted_effect_is_named_and_halves_the_held_out_error(truth):
-    chosen, evidence, held, plain, measured, point_test, fits = _loop(truth, seed=7)
+    chosen, evidence, held, plain, fits, measured, point_test = _loop(truth, seed=7)
     assert chosen == truth, evidence
     before, after = plain.rmse(measured, point_test), held[truth].rmse(measured, point_test)
     assert after < 0.5 * before, (before, after)
@@ -76,6 +102,25 @@ def test_no_effect_planted_none_chosen(seed):
     assert chosen is None, evidence
 
 
+@pytest.mark.parametrize("truth", list(EFFECTS))
+def test_on_the_models_own_specimens_the_planted_effect_is_named(truth):
+    """Specimen offsets (sd 0.02) a hundred times the chaos: judged by the case-to-case
+    scatter (specimen_share 1) bedding and rate are not chosen (2/7 and 5/7 tests better,
+    measured); by the chaos the probe measures each planted effect is, its parameter
+    within +-0.01 of the truth."""
+    chosen, evidence, held, plain, fits, measured, point_test = _loop_own_specimens(truth, seed=5)
+    assert chosen == truth, evidence
+    assert held[truth].rmse(measured, point_test) < 0.5 * plain.rmse(measured, point_test)
+    mean, interval, _ = fits[truth]
+    assert interval[0, 0] <= 0.6 <= interval[0, 1] and interval[0, 1] - interval[0, 0] < 0.02
+
+
+@pytest.mark.parametrize("seed", [3, 11])
+def test_on_the_models_own_specimens_none_planted_none_chosen(seed):
+    chosen, evidence, *_ = _loop_own_specimens(None, seed)
+    assert chosen is None, evidence
+
+
 def test_an_effect_that_changes_nothing_is_not_chosen():
     """Its runs are the plain model's: every held-out gain is round-off, none may count."""
     rng = np.random.default_rng(2)
@@ -84,7 +129,7 @@ def test_an_effect_that_changes_nothing_is_not_chosen():
     measured = _specimens(rng, n, point_test, None, 0.0, 1)[0]
     thetas = initial_design([0.0], [1.0], SETS, seed=3)
     runs = [plain_curves + 1e-15 * th[0] for th in thetas]
-    covs = residual_covariances([plain_curves] + runs, point_test, MEAS_SD ** 2)
+    covs, _ = residual_covariances(plain_curves, point_test, MEAS_SD ** 2)
     plain = held_out_plain(plain_curves, measured, point_test, covs)
     held = held_out_candidate(thetas, runs, measured, point_test, [0.0], [1.0], covs)
     chosen, evidence = choose({"nothing": (held, plain)})
@@ -92,13 +137,36 @@ def test_an_effect_that_changes_nothing_is_not_chosen():
 
 
 def test_specimen_share_scales_only_the_specimen_part():
-    """(share + 1/K) x pooled + measurement: share 1 and share 0 differ by the pooled
-    covariance exactly, the measurement variance stays on the diagonal."""
+    """(share + 1/K) x the plain ensemble's case covariance + measurement: shares 1 and 0.5
+    differ by half that covariance, the measurement variance stays on the diagonal."""
     rng = np.random.default_rng(5)
     n, point_test = _points(rng)
-    curves = [_specimens(rng, n, point_test, None, 0.0, K) for _ in range(3)]
-    one = residual_covariances(curves, point_test, MEAS_SD ** 2)
-    none = residual_covariances(curves, point_test, MEAS_SD ** 2, specimen_share=0.0)
+    plain = _specimens(rng, n, point_test, None, 0.0, K)
+    one, one_plain = residual_covariances(plain, point_test, MEAS_SD ** 2)
+    half, _ = residual_covariances(plain, point_test, MEAS_SD ** 2, specimen_share=0.5)
     for t in one:
-        pooled = (one[t] - none[t])
-        assert np.allclose(none[t], pooled / K + MEAS_SD ** 2 * np.eye(len(pooled)), rtol=1e-12, atol=1e-18)
+        case = 2 * (one[t] - half[t])
+        assert np.allclose(one[t], (1 + 1 / K) * case + MEAS_SD ** 2 * np.eye(len(case)), rtol=1e-12, atol=1e-18)
+        assert np.all(np.diag(case) > 1e-7)       # offsets (sd 0.002), not only the chaos (4e-8)
+        assert np.array_equal(one_plain[t], one[t])      # the K specimens' offset: in every set
+
+
+def test_the_chaos_probe_measures_the_chaos_not_the_specimens():
+    """Runs and probe of the same specimens (offsets sd 0.002, chaos sd 2e-4 per point):
+    the diagonal of the chaos covariance is the chaos variance (within sampling error,
+    K = 400: +-15 % would catch a factor sqrt(2) or 2), the offsets do not enter; with
+    specimen_share 0 the residual covariance is chaos / K + measurement, about the plain
+    mean one chaos / K more (its own draw)."""
+    rng = np.random.default_rng(9)
+    n, point_test = _points(rng)
+    k, chaos = 400, 2e-4
+    offsets = rng.normal(0, 0.002, (k, TESTS))
+    runs, probe = (_specimens(rng, n, point_test, None, 0.0, k, offsets, chaos) for _ in range(2))
+    covs, plain_covs = residual_covariances(runs, point_test, MEAS_SD ** 2, specimen_share=0.0, probe=probe)
+    for t in range(TESTS):
+        cov = chaos_covariance(runs, probe, point_test, t)
+        assert np.allclose(np.diag(cov), chaos ** 2, rtol=0.15)
+        assert np.allclose(covs[t], cov / k + MEAS_SD ** 2 * np.eye(len(cov)), rtol=1e-12, atol=1e-20)
+        assert np.allclose(plain_covs[t], covs[t] + cov / k, rtol=1e-12, atol=1e-20)
+    with pytest.raises(ValueError, match="probe"):
+        residual_covariances(runs, point_test, MEAS_SD ** 2, specimen_share=0.0)

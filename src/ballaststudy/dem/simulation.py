@@ -243,6 +243,14 @@ class Simulation:
         if hold is not None:
             self.balls.fix[ids] = hold
 
+    def perturb_velocities(self, sd, seed):
+        """Add a normal draw of standard deviation ``sd`` [m/s] to each velocity component
+        of every live free ball (not a clump's pebble, none held): an infinitesimal change
+        of the state, to measure how far chaos alone carries a run (loop.select)."""
+        b = self.balls
+        free = np.flatnonzero((b.alive == 1) & (b.clump < 0) & (b.fix == 0))
+        b.vel[free] += np.random.default_rng(seed).normal(0.0, sd, (free.size, 2))
+
     def apply_force(self, ids, f):
         """Constant external force on balls ``ids`` (pebbles: passed to their clump) until
         changed [N]."""

@@ -9,7 +9,9 @@
    covariates.
 2. Every candidate effect (loop.effects): K cases under every test at a design of its
    parameter; held-out (leave one test out) predictive densities and the rule
-   (loop/select.py) choose one effect or none.
+   (loop/select.py) choose one effect or none. With specimen_share 0 (model-made data on
+   these specimens) the plain cases run once more from perturbed velocities: the chaos
+   probe, the noise model's scale.
 3. The chosen effect at its parameter fitted on all tests, run again: the error after.
 4. The long-term horizon: Sato's law fitted to each ensemble (loop/accumulation.py) carries
    it to the measured points beyond the simulated cycles, reported apart.
@@ -23,6 +25,11 @@ import numpy as np
 
 from ..config import ConfigError, load_config
 from ..inputs import writable_dir
+
+# the chaos probe's velocity perturbation (specimen_share 0): far below any physical speed
+# of the test; the chaos it starts is saturated - runs perturbed by 1e-9, 1e-6 and 1e-4 m/s
+# part from the unperturbed ones by the same amount (12 cycles, 24-stone specimens)
+PROBE_M_S = 1e-9
 
 
 def check_loop_targets(cfg, config_file, tests, tests_dir):
@@ -52,15 +59,25 @@ def _points(args, cfg):
     return measured
 
 
+def design(lower, upper, n, seed):
+    """(n, d) design sets of a candidate: one parameter on an even grid from bound to bound
+    (the surrogate never extrapolates, and an effect's bound where it is off - no wear, no
+    fouling - is run: without it the posterior drifted to the unrun end, where the
+    surrogate's width alone fitted the data); more parameters a Latin hypercube."""
+    from ..calibration.bayes import initial_design
+    if len(lower) == 1:
+        return np.linspace(lower[0], upper[0], n)[:, None]
+    return initial_design(lower, upper, n, seed)
+
+
 def _run_candidates(make, names, lp, seed):
     """{effect: (thetas (J, d), [(K, P)] per set, Evaluator)}: every design set under every test."""
-    from ..calibration.bayes import initial_design
     from ..config import job_seed
     from .effects import EFFECTS
     out = {}
     for name in names:
         eff = EFFECTS[name]
-        thetas = initial_design(*_bounds(name), lp["design_sets"], job_seed(seed, f"loop/{name}"))
+        thetas = design(*_bounds(name), lp["design_sets"], job_seed(seed, f"loop/{name}"))
         evaluate = make([p.name for p in eff.parameters], name)
         out[name] = (thetas, evaluate(thetas), evaluate)
     return out
@@ -80,20 +97,20 @@ class Candidate:
     held: object             # select.HeldOut of the candidate
     fit: tuple               # select.fit_all: (mean (d,), interval90 (d, 2), ess)
     evaluate: object         # its runner.Evaluator (sets: every run, design first)
-    plain: object            # select.HeldOut of the plain model under the same covariance
+    plain: object            # select.HeldOut of the plain model (the same for every candidate)
 
 
-def _judge(runs, plain_at, y, point_test, lp, seed):
-    """{effect: Candidate}: each candidate and the plain model under one noise model, the
-    case covariance pooled over the plain ensemble and the candidate's sets (select.py)."""
+def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
+    """{effect: Candidate}: every candidate and the plain model under one noise model, made
+    from the plain runs (select.residual_covariances)."""
     from .select import fit_all, held_out_candidate, held_out_plain, residual_covariances
+    covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
+                                            probe_at)
+    plain = held_out_plain(plain_at, y, point_test, plain_covs)
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
-        covs = residual_covariances([plain_at] + list(at), point_test, lp["measurement_sd"] ** 2,
-                                    lp["specimen_share"])
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
-        out[name] = Candidate(thetas, at, held_out_candidate(*args), fit_all(*args), evaluate,
-                              held_out_plain(plain_at, y, point_test, covs))
+        out[name] = Candidate(thetas, at, held_out_candidate(*args), fit_all(*args), evaluate, plain)
     return out
 
 
@@ -116,28 +133,31 @@ def _loop(args):
                         params={"loop": lp, "base": base}, seed=cfg["seed"])
     t0 = time.time()
 
-    def make(names, effect=None):
+    def make(names, effect=None, perturbation_m_s=0.0):
         from ..calibration.runner import Evaluator
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
-                         progress=not args.quiet, effect=effect, base=base)
+                         progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s)
 
     plain_eval = make([])
     plain_at = plain_eval(np.zeros((1, 0)))[0]
+    probe_eval = make([], perturbation_m_s=PROBE_M_S) if lp["specimen_share"] == 0 else None
+    probe_at = probe_eval(np.zeros((1, 0)))[0] if probe_eval else None
     conditions = [load_conditions(c) for c in args.conditions]
     untestable = [e for e in lp["effects"] if not EFFECTS[e].testable(conditions)]
     runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
-    candidates = _judge(runs, plain_at, y, point_test, lp, cfg["seed"])
+    candidates = _judge(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"])
     chosen, evidence = choose({k: (c.held, c.plain) for k, c in candidates.items()})
     after = None
     if chosen:
         best = candidates[chosen]
         best.evaluate(best.fit[0][None])            # the chosen effect at its fitted value
         after = best.evaluate.sets[-1]
+    probe_set = probe_eval.sets[0] if probe_eval else None
     files = write_outputs(out, args, lp, measured, plain_eval.sets[0], plain_at.mean(axis=0), candidates, evidence,
-                          chosen, after, base, untestable, minutes=(time.time() - t0) / 60)
+                          chosen, after, base, untestable, minutes=(time.time() - t0) / 60, probe_set=probe_set)
     recorder.finish()
-    sets = plain_eval.sets + [st for c in candidates.values() for st in c.evaluate.sets]
+    sets = plain_eval.sets + (probe_eval.sets if probe_eval else []) + [st for c in candidates.values() for st in c.evaluate.sets]
     cases = [out / "cases" / st["key"] / f"test{j}" / f"case{k}.nc"   # this run's sets (the
              for st in sets for j in range(len(args.measured))       # folder may cache older ones)
              for k in range(len(args.specimens))]

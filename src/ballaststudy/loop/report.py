@@ -105,7 +105,7 @@ def _padded(rows, fill):
     return out.astype(str) if fill == "" else out
 
 
-def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, point_test, plain_mean):
+def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, point_test, plain_mean, probe_set=None):
     units, long_name, _ = VARIABLES[lp["quantity"]]
     names = list(candidates)
     data = {
@@ -114,8 +114,8 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
         "point_test": ("point", point_test.astype(np.int32), {"units": "1", "long_name": "test of the point"}),
         "plain": (("test", "case", "cycle"), plain_set["curves"], {"units": units, "long_name": "plain model: simulated " + long_name}),
         "plain_prediction": ("point", plain_mean, {"units": units, "long_name": "plain model: ensemble mean at the point"}),
-        "plain_lpd": (("effect", "test"), np.array([c.plain.lpd for c in candidates.values()]),
-                      {"units": "1", "long_name": "plain model: log predictive density of the test's points, under the noise model of its comparison with the effect"}),
+        "plain_lpd": ("test", next(iter(candidates.values())).plain.lpd if candidates else np.full(len(measured), np.nan),
+                      {"units": "1", "long_name": "plain model: log predictive density of the test's points (the noise model every model is judged under)"}),
         "candidate": (("effect", "set", "test", "case", "cycle"),
                       np.array([[s["curves"] for s in c.evaluate.sets[: len(c.thetas)]] for c in candidates.values()]),
                       {"units": units, "long_name": "candidate effect at a design set: simulated " + long_name}),
@@ -129,6 +129,8 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
         "held_out_prediction": (("effect", "point"), np.array([c.held.predicted for c in candidates.values()]),
                                 {"units": units, "long_name": "held-out prediction of the point (its test left out)"}),
     }
+    if probe_set is not None:
+        data["plain_probe"] = (("test", "case", "cycle"), probe_set["curves"], {"units": units, "long_name": "plain model run again from velocities perturbed by round-off size (the chaos probe): simulated " + long_name})
     if after is not None:
         data["after"] = (("test", "case", "cycle"), after["curves"], {"units": units, "long_name": "chosen effect at its fitted value: simulated " + long_name})
     return xr.Dataset(data, coords={
@@ -139,7 +141,7 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
 
 
 def write_outputs(out, args, lp, measured, plain_set, plain_mean, candidates, evidence, chosen, after,
-                  base, untestable, minutes):
+                  base, untestable, minutes, probe_set=None):
     y = np.concatenate([v for _, v in measured])
     point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
     before = per_test_rows(args, lp, plain_set["curves"], measured)
@@ -151,13 +153,13 @@ def write_outputs(out, args, lp, measured, plain_set, plain_mean, candidates, ev
     horizon = dict(before=long_term(args, lp, plain_set["curves"]),
                    after=long_term(args, lp, after["curves"]) if after is not None else None)
     files = [out / "report.md", out / "loop.nc", out / "chosen.yaml", out / "curves.png"]
-    ds = loop_dataset(lp, measured, plain_set, candidates, after, before, y, point_test, plain_mean)
+    ds = loop_dataset(lp, measured, plain_set, candidates, after, before, y, point_test, plain_mean, probe_set)
     ds.attrs.update(tests_json=json.dumps(before), covariate_tests_json=json.dumps(cov), candidates_json=json.dumps(cands),
                     chosen=chosen or "none", material_parameters_json=json.dumps(base),
                     untestable_effects=", ".join(untestable) or "none")
     with atomic_path(files[1]) as tmp:
         ds.to_netcdf(tmp)
-    dem_cases = len(args.specimens) * len(args.measured) * (1 + sum(len(c.evaluate.sets) for c in candidates.values()))
+    dem_cases = len(args.specimens) * len(args.measured) * (1 + (probe_set is not None) + sum(len(c.evaluate.sets) for c in candidates.values()))
     with atomic_path(files[2]) as tmp:
         tmp.write_text(yaml.safe_dump(_chosen_doc(chosen, cands, base), sort_keys=False))
     plot_curves(files[3], lp, measured, plain_set, after, horizon, [r["test"] for r in before])
@@ -174,6 +176,15 @@ def _chosen_doc(chosen, cands, base):
             "parameters": dict(zip(row["parameters"], row["mean"])) if row else {},
             "interval90": dict(zip(row["parameters"], row["interval90"])) if row else {},
             "material_parameters": base or "table_4_2"}
+
+
+def _noise_words(lp):
+    if lp["specimen_share"] == 0:
+        return ("the measured curves are taken as runs of the model's own specimens, so the scatter is "
+                "chaos / K: the plain ensemble run again from velocities perturbed by round-off size "
+                "(the chaos probe), plus the measurement's.")
+    return (f"the measured specimen scatters like {lp['specimen_share']:g} x one of the plain model's, "
+            "plus 1/K of that for the ensemble mean, plus the measurement's.")
 
 
 def _fmt_p(p):
@@ -215,7 +226,7 @@ def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain_mean, 
     lines += ["", "## Candidate effects, judged on held-out tests", "",
               "Each test left out once: the effect's parameter fitted on the others, the left-out test's "
               "points predicted. Gain = sum over tests of held-out log predictive density minus the plain "
-              "model's. Rule: one-sided Wilcoxon signed-rank test of the per-test gains, p < 0.05 / "
+              "model's, every model under one noise model: " + _noise_words(lp) + " Rule: one-sided Wilcoxon signed-rank test of the per-test gains, p < 0.05 / "
               f"{len(cands)} (candidates); the largest gain among the passing is chosen.", "",
               "| effect | parameter: fitted mean [90 %] | gain | SE | tests better | p | held-out RMSE | verdict |",
               "|---|---|---|---|---|---|---|---|"]

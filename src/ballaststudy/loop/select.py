@@ -5,17 +5,33 @@ cases per set) at a design of theta under every test give the ensemble-mean curv
 tests' measured points, carried over theta by a Gaussian-process surrogate
 (calibration.bayes.Surrogate). The plain model is the same model with the effect off.
 
-Likelihood of one test's points: multivariate normal around the surrogate mean with the
-covariance of one more specimen, (1 + 1/K) times the case-to-case covariance of that
-test's points pooled over the sets, plus the measurement variance and the surrogate's own
-variance on the diagonal. Each candidate is compared with the plain model under one noise
-model, the covariance pooled over the plain model's ensemble and the candidate's own sets
-(residual_covariances): not over other candidates', whose parameters may make specimens
-fail and scatter far more (found by bench/loop_undeclared.py: one unstable candidate's
-pooled scatter drowned every other candidate's gain). The points of a curve are correlated (a specimen is softer or
+Likelihood of one test's points: multivariate normal around the model's mean (the
+candidate's surrogate, the plain ensemble's mean) with the residual covariance of that
+test (residual_covariances) plus the surrogate's own variance on the diagonal. Every model
+is judged under one noise model, made from the plain model's runs: the noise belongs to
+the measurement, not to a candidate, and only under one noise model are the candidates'
+gains over the plain model comparable (a candidate judged under its own, wider scatter -
+one whose parameters make specimens fail - won by its width: found with
+bench/loop_undeclared.py). The points of a curve are correlated (a specimen is softer or
 stiffer all along): independent points would count one specimen's offset many times over.
-The pooled covariance is shrunk towards its diagonal (SHRINK) so that it stays positive
-definite with few cases.
+Covariances are shrunk towards their diagonal (SHRINK) so that they stay positive definite
+with few cases.
+
+  a lab test (specimen_share > 0): the measured specimen scatters like share x one model
+      specimen, and the ensemble mean misses the model's own mean by 1/K of that:
+      (share + 1/K) x the plain ensemble's case-to-case covariance + the measurement's.
+  model-made data on the model's own specimens (specimen_share = 0, common random
+      numbers): the measured curve is one run of these specimens, no specimen's offset
+      separates it from the model's. What remains is chaos: a run and the same run from a
+      state perturbed by round-off part ways (DEM is chaotic), so the ensemble mean at a
+      parameter value scatters by chaos / K about its smooth trend: the measured curve
+      carries one such draw, the plain ensemble's mean another (so the plain model is
+      judged under twice C / K), a candidate's surrogate its own variance instead. The
+      chaos covariance C comes from the plain ensemble run twice, the second time from
+      infinitesimally perturbed velocities (chaos_covariance): half the covariance of
+      the difference.
+      The case-to-case covariance would be far too wide here (on 24-stone specimens a
+      specimen's offset is as large as the mean strain; the chaos a fraction of it).
 
 Leave one condition out: for each test t, the posterior of theta from the other tests
 (uniform prior, importance weights on a scrambled Sobol sample), the held-out log
@@ -48,16 +64,16 @@ ALPHA = 0.05          # family-wise level of the rule over the candidates
 GAIN_TIE = 0.5
 
 
-def pooled_covariance(curves_list, point_test, test):
-    """(P_t, P_t) case-to-case covariance of test ``test``'s points, pooled over the sets
-    (each set's cases around their own mean), shrunk towards its diagonal."""
-    sel = np.asarray(point_test) == test
-    dev = [c[:, sel] - c[:, sel].mean(axis=0) for c in curves_list if len(c) > 1]
-    dof = sum(len(d) - 1 for d in dev)
-    if dof == 0:
-        raise ValueError("no set has K >= 2 cases: the case-to-case covariance is unknown")
-    cov = sum(d.T @ d for d in dev) / dof
+def _shrunk(cov):
     return (1 - SHRINK) * cov + SHRINK * np.diag(np.diag(cov))
+
+
+def case_covariance(curves, point_test, test):
+    """(P_t, P_t) case-to-case covariance of test ``test``'s points in one ensemble (K, P),
+    shrunk towards its diagonal."""
+    if len(curves) < 2:
+        raise ValueError("fewer than 2 cases: the case-to-case covariance is unknown")
+    return _shrunk(np.atleast_2d(np.cov(np.asarray(curves)[:, np.asarray(point_test) == test], rowvar=False)))
 
 
 def _mvn_logpdf(r, cov):
@@ -68,16 +84,35 @@ def _mvn_logpdf(r, cov):
     return -0.5 * (np.sum(z ** 2, axis=-1) + logdet + r.shape[-1] * np.log(2 * np.pi))
 
 
-def residual_covariances(curves_list, point_test, measurement_var, specimen_share=1.0):
-    """{test: covariance of the measured curve's residual}: (specimen_share + 1/K) pooled +
-    measurement. specimen_share: the measured specimen's own scatter as a share of one model
-    specimen's - 1 (the default) if the test's specimen scatters like one of ours; less for
-    a test on a larger specimen (a 3D cell holds far more stones than a 2D slice); 0 if the
-    measured curve is the model's own ensemble (model-made data on the same specimens)."""
-    inflate = specimen_share + np.mean([1.0 / len(c) for c in curves_list])
-    return {t: inflate * pooled_covariance(curves_list, point_test, t)
-            + measurement_var * np.eye(int(np.sum(np.asarray(point_test) == t)))
-            for t in np.unique(point_test)}
+def chaos_covariance(runs, probe, point_test, test):
+    """(P_t, P_t) covariance of the chaos of one run at test ``test``'s points: runs and
+    probe (K, P) the same K specimens run twice, the probe from perturbed states, so each
+    difference is two independent chaos draws (its mean is zero: K degrees of freedom)."""
+    sel = np.asarray(point_test) == test
+    d = np.asarray(runs)[:, sel] - np.asarray(probe)[:, sel]
+    return _shrunk(d.T @ d / (2 * len(d)))
+
+
+def residual_covariances(plain, point_test, measurement_var, specimen_share=1.0, probe=None):
+    """({test: covariance of the residual about a candidate's surrogate}, {test: the same
+    about the plain ensemble's mean}) by the module doc, from the plain ensemble ``plain``
+    (K, P) and, for specimen_share 0, its chaos ``probe`` (K, P). They differ for
+    specimen_share 0 only: there the plain mean is one chaotic draw of its own (C / K more,
+    as a candidate's surrogate carries its own variance), where with a lab specimen the
+    1/K term - the K specimens' offset, common to every set - is in both."""
+    k = len(plain)
+    if specimen_share == 0 and probe is None:
+        raise ValueError("specimen_share 0 (the model's own specimens) needs the chaos probe's runs")
+    covs, plain_covs = {}, {}
+    for t in np.unique(point_test):
+        if specimen_share == 0:
+            chaos = chaos_covariance(plain, probe, point_test, t) / k
+            covs[t] = chaos + measurement_var * np.eye(len(chaos))
+            plain_covs[t] = covs[t] + chaos
+        else:
+            case = case_covariance(plain, point_test, t)
+            covs[t] = plain_covs[t] = (specimen_share + 1.0 / k) * case + measurement_var * np.eye(len(case))
+    return covs, plain_covs
 
 
 def per_test_loglik(mean, sd, y, point_test, covs):
@@ -115,7 +150,7 @@ def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, 
 
 def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
     """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P));
-    covs: residual_covariances of every ensemble run."""
+    covs: residual_covariances' first (the noise every candidate is judged under)."""
     y, point_test = np.asarray(y, float), np.asarray(point_test)
     samples, mean, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper,
                                      covs, n_samples, seed)
@@ -154,7 +189,8 @@ def held_out_plain(curves, y, point_test, covs):
 
 def choose(pairs):
     """(chosen name or None, {name: {gain, se, z, wins, p}}) by the rule in the module doc;
-    pairs: {name: (the candidate's HeldOut, the plain model's under the same covariance)}."""
+    pairs: {name: (the candidate's HeldOut, the plain model's)}, all under one noise model
+    (so the gains of different candidates are comparable)."""
     evidence = {}
     for name, (held, plain) in pairs.items():
         diff = held.lpd - plain.lpd
