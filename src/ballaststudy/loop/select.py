@@ -10,8 +10,9 @@ candidate's surrogate, the plain ensemble's mean) with the residual covariance o
 test (residual_covariances) plus the surrogate's own variance on the diagonal. Every model
 is judged under one noise model, made from the plain model's runs: the noise belongs to
 the measurement, not to a candidate, and only under one noise model are the candidates'
-gains over the plain model comparable (a candidate judged under its own, wider scatter -
-one whose parameters make specimens fail - won by its width: found with
+gains over the plain model comparable (judged each under the scatter pooled with its own
+sets, a candidate whose sets scatter little gained 1e5 nats over a plain model held to
+that narrow noise, and one whose sets make specimens fail drowned every gain: found with
 bench/loop_undeclared.py). The points of a curve are correlated (a specimen is softer or
 stiffer all along): independent points would count one specimen's offset many times over.
 Covariances are shrunk towards their diagonal (SHRINK) so that they stay positive definite
