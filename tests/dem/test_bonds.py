@@ -238,3 +238,29 @@ def test_dropping_bonds_renumbers_the_verlet_lists_bond_ids():
     assert sim.drop_deleted_bonds() == 1
     assert pr.bond[: pr.n[0]].tolist() == [1] and (bd.i[1], bd.j[1]) == (pr.i[0], pr.j[0]) == (4, 5)
     assert sim.energies() == energy
+
+
+@pytest.mark.parametrize("n_elements", [1, 3])
+def test_a_joint_pushes_its_balls_before_and_after_its_elements_break(n_elements):
+    """The joint's force reaches both balls, equal and opposite along the line of centres,
+    on the lean path (all elements intact) and on the full one (elements broken, the
+    interface still pressed): F on ball 1 = -sum F_n (tension positive) along +x."""
+    fj = FlatJointMaterial()
+    sim = pair(fj, n_elements=n_elements)
+    sim.set_ball_velocity(1, vel=(-1e-4, 0.0))        # press: intact, compressed
+    sim.run(50)
+    fn = sim.bonds.fn[0].sum()
+    assert fn < 0.0 and (sim.bonds.state[0] == 1).all()
+    assert sim.balls.force[1, 0] == pytest.approx(-fn, rel=1e-12)
+    assert sim.balls.force[0, 0] == pytest.approx(fn, rel=1e-12)
+    pull_until_break(sim, (2e-3, 0.0))                # every element breaks in tension
+    sim.set_ball_velocity(1, vel=(0.0, 0.0))
+    sim.run(2000)
+    assert (sim.bonds.state[0] == 0).all() and sim.bonds.active[0] == 1
+    sim.set_ball_velocity(1, vel=(-2e-3, 0.0))        # pressed back together: compression only
+    sim.run(4000, callback=lambda s: s.bonds.fn[0].sum() < -1.0, every=1)
+    fn = sim.bonds.fn[0].sum()
+    assert fn < -1.0
+    assert sim.balls.force[1, 0] == pytest.approx(-fn, rel=1e-12)
+    assert sim.balls.force[0, 0] == pytest.approx(fn, rel=1e-12)
+    assert abs(sim.balls.force[1, 1]) <= 1e-9 * abs(fn)
