@@ -5,20 +5,17 @@ the plain model plus noise (the negative control) it chooses nothing and leaves 
 unchanged. Slow (5-6 min on 2 cores): the five scenarios share one case cache (the
 candidates' design sets run once; each scenario adds its truth's cases).
 
-The negative control is asserted, and so are rate and fouling, whose goal is met. It is
-not met for abrasion and end restraint at this scale (3 specimens of 24 synthetic stones,
-12 cycles, 8 tests): each is a strict xfail, which fails the suite the day it is met.
-Measured with the noise of model-made data (specimen_share 0: the chaos of the model's own
-specimens, from the plain ensemble run again from perturbed velocities; loop/select.py)
-and the candidates' design on an even grid from bound to bound, with the one-pass flat
-joints (1667118):
-  - rate: chosen (8/8 better, p 0.004), held-out RMSE -68 %;
-  - abrasion: not chosen (7/8 better, p 0.027 > 0.05/4), held-out RMSE -60 %;
-  - fouling: chosen (7/8, p 0.008), held-out RMSE -87 %;
-  - end restraint: chosen (8/8, p 0.004), held-out RMSE -44 %, not -50 %.
-Which effects pass moves with rounding at this scale: with the three-pass flat joints
-before it (dc3df43) abrasion was chosen at -38 % and fouling was not chosen (7/8, p 0.074),
-end restraint not either (6/8, p 0.27).
+The negative control is asserted, and so is rate, whose goal is met. The goal is not met
+for the other three at this scale (3 specimens of 24 synthetic stones, 12 cycles, 8
+tests): each is a strict xfail, which fails the suite the day it is met. Measured with
+the noise of model-made data (specimen_share 0: the chaos of the model's own specimens,
+from the plain ensemble run again from perturbed velocities; loop/select.py) and the
+candidates' design on an even grid from bound to bound:
+  - rate: chosen (8/8 better, p 0.004), held-out RMSE -67 %;
+  - abrasion: chosen (8/8, p 0.004, fitted 0.127 for the planted 0.12), held-out RMSE
+    -38 %, not -50 %;
+  - fouling: not chosen (7/8 better, p 0.074 > 0.05/4), held-out RMSE -61 %;
+  - end restraint: not chosen (6/8, p 0.27), held-out RMSE -2 %.
 Before (the case-to-case scatter, each candidate under its own pooled noise): only end
 restraint was chosen, and rate was taken for end restraint. Earlier runs that "found" an
 effect 8/8 (sessions up to 25) had tests sharing p and q: for every effect but rate those
@@ -66,12 +63,11 @@ def _named_and_halved(folder, specimens, effect):
     assert evidence[effect]["held_out_rmse"] <= 0.5 * plain, (evidence[effect], plain)
 
 
-@pytest.mark.parametrize("effect", ["rate", "fouling"])
-def test_planted_effect_is_named_and_halves_the_held_out_error(scenarios, effect):
-    _named_and_halved(*scenarios, effect)
+def test_planted_rate_is_named_and_halves_the_held_out_error(scenarios):
+    _named_and_halved(*scenarios, "rate")
 
 
-@pytest.mark.parametrize("effect", ["abrasion", "end_restraint"])
+@pytest.mark.parametrize("effect", ["abrasion", "fouling", "end_restraint"])
 @GOAL_NOT_MET
-def test_planted_effect_not_yet_named_or_halved(scenarios, effect):
+def test_the_planted_effect_is_named_and_halves_the_held_out_error(scenarios, effect):
     _named_and_halved(*scenarios, effect)
