@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from . import params as P
-from .jit import FAST, LOOP, NO_NRT
+from .jit import LOOP, NO_NRT
 
 MODE_TENSION = 1
 MODE_SHEAR = 2
@@ -61,10 +61,11 @@ def _strip_sq(gc, th, a, b, compressed_only):
     return fb - fa
 
 
-# Per-bond scratch rows (run_steps owns the array: ``bond_scratch``) for the bonds the lean
-# pass hands over to the full one: their contact frame, then their element totals.
-G_D, G_NX, G_NY, G_AI, T_FN, T_FS, T_MC = range(7)
-SCRATCH_COLUMNS = 7
+# Per-bond scratch rows of the three passes of ``bond_forces`` (run_steps owns the
+# array: ``bond_scratch``): the contact frame from the geometry pass, the element totals
+# from the element pass.
+G_D, G_NX, G_NY, G_VT, G_AI, T_FN, T_FS, T_MC = range(8)
+SCRATCH_COLUMNS = 8
 
 
 @njit(cache=True)
@@ -75,44 +76,30 @@ def bond_scratch(n_bonds):
 
 @njit(**LOOP)
 def bond_forces(run, kin, balls, fa, bonds, log, scratch):
-    """Flat-joint forces, element failure (logged) and interface removal: one lean pass
-    over the active bonds (frame, elements, forces onto the balls) for every bond whose
-    elements are all intact and stay so; the others are listed and take the full path
-    (failure, broken elements, removal) in bond order, then their forces go onto the balls.
+    """Flat-joint forces, element failure (logged) and interface removal, in three passes
+    over the active bonds (geometry, elements, forces onto the balls): the rows ``g`` of
+    ``scratch`` (``bond_scratch``) carry each bond's frame and totals between them.
 
-    Why so (measured on a thesis-resolution box case after static loading, 1720 bonds of
-    one element, 23 on the full path; best of 7 x 3000 calls): three passes over every
-    bond (frame, elements, forces onto the balls) took 18.4 us per call, this 15.7. The
-    lean pass compiled for a runtime element count took 18.4 alone: the thesis' N_r = 1
-    gets machine code of its own (the ``ne == 1`` branch), other counts the general loop."""
+    Why so (measured on the thesis-resolution box case, 1619 bonds): the fused loop was
+    bound by the divider (a square root and six divisions per bond); one reciprocal per
+    bond, the failure tests multiplied through by the element area instead of dividing
+    (sigma >= sigma_c as F_n >= sigma_c A_e), and the split passes cut it from 31 to
+    24 us per step. Each pass runs over the bond index itself: an indirect list of the
+    active bonds was slower (every bond array then needs its own index arithmetic)."""
     g, full = scratch
-    ne = bonds.state.shape[1]
-    if ne == 1:
-        n_full = _lean_bonds(run, kin, balls.rad, fa, bonds, g, full, 1)
-    else:
-        n_full = _lean_bonds(run, kin, balls.rad, fa, bonds, g, full, ne)
+    _bond_geometry(run.prm[P.DT], kin, balls.rad, bonds, g)
+    n_full = _bond_elements(run, bonds, g, full)
     if n_full > 0:
         _bond_elements_in_full(run, kin, balls, bonds, log, g, full, n_full)
-        _bond_scatter(bonds, g, fa, full, n_full)
+    _bond_scatter(bonds, g, fa)
 
 
-@njit(cache=True, error_model="numpy", fastmath=FAST, inline="always")
-def _lean_bonds(run, kin, rad, fa, bonds, g, full, ne):
-    """One pass over the active bonds: the contact frame (centre distance d, normal n
-    from i to j, tangential velocity of j relative to i at the interface centre, the arm
-    ai from the centre of i), theta advanced, the element forces; a bond whose elements are
-    all intact and stay so puts its forces onto the balls; the others (a broken element, a
-    failure in this step: rare) keep their frame in g and are listed in ``full`` (returns
-    their count). ``ne`` elements per bond (a constant where inlined with one).
-    A call to the rare paths inside this loop made it ~1.6x slower."""
+@njit(**LOOP)
+def _bond_geometry(dt, kin, rad, bonds, g):
+    """The contact frame of every active bond:
+    centre distance d, normal n (i -> j), tangential velocity of j relative to i at the
+    interface centre, distance ai from the centre of i to it; advances theta."""
     b_i, b_j, b_active, theta = bonds.i, bonds.j, bonds.active, bonds.theta
-    rbar, d0 = bonds.rbar, bonds.d0
-    kn, ks, sigc, coh, tanphi = bonds.kn, bonds.ks, bonds.sigc, bonds.coh, bonds.tanphi
-    bmom, state, bfn, bfs = bonds.moment, bonds.state, bonds.fn, bonds.fs
-    dt = run.prm[P.DT]
-    t = run.prm[P.THICK]
-    inv_ne = 1.0 / ne
-    n_full = 0
     for b in range(b_i.shape[0]):
         if not b_active[b]:
             continue
@@ -129,14 +116,39 @@ def _lean_bonds(run, kin, rad, fa, bonds, g, full, ne):
         ai = rad[i] + 0.5 * (d - rad[i] - rad[j])     # centre -> interface centre
         aj = d - ai
         w = kin[i, 4] * ai + kin[j, 4] * aj
-        vt = (kin[j, 2] - kin[i, 2] - w * tx) * tx + (kin[j, 3] - kin[i, 3] - w * ty) * ty
-        th = theta[b] + (kin[j, 4] - kin[i, 4]) * dt
-        theta[b] = th
-        gc = d - d0[b]
+        g[b, G_VT] = (kin[j, 2] - kin[i, 2] - w * tx) * tx + (kin[j, 3] - kin[i, 3] - w * ty) * ty
+        theta[b] += (kin[j, 4] - kin[i, 4]) * dt
+        g[b, G_D] = d
+        g[b, G_NX] = nx
+        g[b, G_NY] = ny
+        g[b, G_AI] = ai
+
+
+@njit(**LOOP)
+def _bond_elements(run, bonds, g, full):
+    """Element forces of the active bonds whose elements are all intact and stay so (the
+    lean path): their totals (F_n, F_s, moment) go to g[:, T_FN:]. The others (a broken
+    element, a failure in this step) are listed in ``full`` (returns their count) for
+    ``_bond_elements_in_full`` (failure, logging, interface removal),
+    which takes them in bond order (so the log and the energy sums keep their order).
+    Calls (to the rare paths) in the lean loop made it ~1.6x slower."""
+    b_active, rbar, d0 = bonds.active, bonds.rbar, bonds.d0
+    kn, ks, sigc, coh, tanphi = bonds.kn, bonds.ks, bonds.sigc, bonds.coh, bonds.tanphi
+    theta, bmom, state, bfn, bfs = bonds.theta, bonds.moment, bonds.state, bonds.fn, bonds.fs
+    dt = run.prm[P.DT]
+    t = run.prm[P.THICK]
+    ne = state.shape[1]
+    inv_ne = 1.0 / ne
+    n_full = 0
+    for b in range(b_active.shape[0]):
+        if not b_active[b]:
+            continue
+        th = theta[b]
+        gc = g[b, G_D] - d0[b]
         le = 2.0 * rbar[b] * inv_ne
         ae = le * t
         knt = kn[b] * t
-        dfs = ks[b] * ae * vt * dt
+        dfs = ks[b] * ae * g[b, G_VT] * dt
         ftot_n = 0.0
         ftot_s = 0.0
         mc = 0.0
@@ -155,30 +167,14 @@ def _lean_bonds(run, kin, rad, fa, bonds, g, full, ne):
             ftot_s += fs
             mc += knt * i1
         if handed_over:
-            g[b, G_D] = d
-            g[b, G_NX] = nx
-            g[b, G_NY] = ny
-            g[b, G_AI] = ai
             full[n_full] = b
             n_full += 1
             continue
         bmom[b] = mc
-        _onto_balls(fa, i, j, nx, ny, ai, aj, ftot_n, ftot_s, mc)
+        g[b, T_FN] = ftot_n
+        g[b, T_FS] = ftot_s
+        g[b, T_MC] = mc
     return n_full
-
-
-@njit(cache=True, error_model="numpy", fastmath=FAST, inline="always")
-def _onto_balls(fa, i, j, nx, ny, ai, aj, ftot_n, ftot_s, mc):
-    """A bond's totals (normal F_n, tension positive; shear F_s on j along t = z x n; the
-    elements' moment) onto its balls."""
-    fx = -ftot_n * nx - ftot_s * ny          # force on j (tension pulls j to i)
-    fy = -ftot_n * ny + ftot_s * nx
-    fa[j, 0] += fx
-    fa[j, 1] += fy
-    fa[i, 0] -= fx
-    fa[i, 1] -= fy
-    fa[j, 2] += mc - aj * ftot_s
-    fa[i, 2] += -mc - ai * ftot_s
 
 
 @njit(**LOOP)
@@ -294,15 +290,31 @@ def _log_break(log, step, time, b, e, i, j, stone, mode, x, y, stress):
 
 
 @njit(**LOOP)
-def _bond_scatter(bonds, g, fa, full, n_full):
-    """The forces of the ``n_full`` bonds of the full path onto their balls, in bond order
-    (a bond the full pass removed carries none)."""
-    for k in range(n_full):
-        b = full[k]
-        if bonds.active[b]:
-            ai = g[b, G_AI]
-            _onto_balls(fa, bonds.i[b], bonds.j[b], g[b, G_NX], g[b, G_NY], ai, g[b, G_D] - ai,
-                        g[b, T_FN], g[b, T_FS], g[b, T_MC])
+def _bond_scatter(bonds, g, fa):
+    """The active bonds' forces and moments onto their balls, in bond order."""
+    b_i, b_j, b_active = bonds.i, bonds.j, bonds.active
+    for b in range(b_i.shape[0]):
+        if not b_active[b]:
+            continue
+        i = b_i[b]
+        j = b_j[b]
+        nx = g[b, G_NX]
+        ny = g[b, G_NY]
+        tx = -ny
+        ty = nx
+        ftot_n = g[b, T_FN]
+        ftot_s = g[b, T_FS]
+        mc = g[b, T_MC]
+        ai = g[b, G_AI]
+        aj = g[b, G_D] - ai
+        fx = -ftot_n * nx + ftot_s * tx          # force on j (tension pulls j to i)
+        fy = -ftot_n * ny + ftot_s * ty
+        fa[j, 0] += fx
+        fa[j, 1] += fy
+        fa[i, 0] -= fx
+        fa[i, 1] -= fy
+        fa[j, 2] += mc - aj * ftot_s
+        fa[i, 2] += -mc - ai * ftot_s
 
 
 @njit(cache=True, error_model="numpy")
