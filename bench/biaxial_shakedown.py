@@ -8,9 +8,10 @@ Per seed: the test's small specimen (24 synthetic stones, its parameters) assemb
 the package on the path, bond strengths x 1e6, 50 cycles of q; then the permanent axial
 strain of cycles 1-10 ("early") and 40-49 ("late") and whether early > 0 and early >= 5
 |late| (the test's assertion). ``--perturb SD`` adds a normal draw of SD [m/s] to the free
-balls' velocities at the assembly's second run (after the stones are placed): a
-round-off-sized change of the trajectory, the control for an engine change that differs
-from its reference by round-off only. The test asserts this on one specimen (seed 7), so
+balls' velocities at the assembly's first run (the stones placed, before the drop): a
+round-off-sized change of the whole trajectory, the control for an engine change that
+differs from its reference by round-off only. (Perturbed later, at the second run, the
+runs keep the reference's landing, which decides most of the outcome.) The test asserts this on one specimen (seed 7), so
 what matters for a change is the pass rate over seeds beside its reference's (with and
 without the perturbation). Never a test.
 """
@@ -29,13 +30,13 @@ SMALL = dict(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=200
 
 
 def perturbed_assembly(sd):
-    """Simulation.run wrapped: the first call after step 0 perturbs the velocities first."""
+    """Simulation.run wrapped: its first call perturbs the velocities first."""
     from ballaststudy.dem.simulation import Simulation
     plain = Simulation.run
     state = {"done": sd <= 0.0}
 
     def run(self, *args, **kwargs):
-        if not state["done"] and self.step > 0:
+        if not state["done"]:
             self.perturb_velocities(sd, seed=1)
             state["done"] = True
         return plain(self, *args, **kwargs)
