@@ -97,12 +97,12 @@ class Candidate:
     held: object             # select.HeldOut of the candidate
     fit: tuple               # select.fit_all: (mean (d,), interval90 (d, 2), ess)
     evaluate: object         # its runner.Evaluator (sets: every run, design first)
-    plain: object            # select.HeldOut of the plain model (the same for every candidate)
 
 
 def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
-    """{effect: Candidate}: every candidate and the plain model under one noise model, made
-    from the plain runs (select.residual_covariances)."""
+    """({effect: Candidate}, the plain model's select.HeldOut): every candidate and the
+    plain model under one noise model, made from the plain runs
+    (select.residual_covariances)."""
     from .select import fit_all, held_out_candidate, held_out_plain, residual_covariances
     covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
                                             probe_at)
@@ -110,8 +110,8 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
-        out[name] = Candidate(thetas, at, held_out_candidate(*args), fit_all(*args), evaluate, plain)
-    return out
+        out[name] = Candidate(thetas, at, held_out_candidate(*args), fit_all(*args), evaluate)
+    return out, plain
 
 
 def _loop(args):
@@ -146,8 +146,8 @@ def _loop(args):
     conditions = [load_conditions(c) for c in args.conditions]
     untestable = [e for e in lp["effects"] if not EFFECTS[e].testable(conditions)]
     runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
-    candidates = _judge(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"])
-    chosen, evidence = choose({k: (c.held, c.plain) for k, c in candidates.items()})
+    candidates, plain = _judge(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"])
+    chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()})
     after = None
     if chosen:
         best = candidates[chosen]
@@ -155,7 +155,8 @@ def _loop(args):
         after = best.evaluate.sets[-1]
     probe_set = probe_eval.sets[0] if probe_eval else None
     files = write_outputs(out, args, lp, measured, plain_eval.sets[0], plain_at.mean(axis=0), candidates, evidence,
-                          chosen, after, base, untestable, minutes=(time.time() - t0) / 60, probe_set=probe_set)
+                          chosen, after, base, untestable, minutes=(time.time() - t0) / 60, probe_set=probe_set,
+                          plain_held=plain)
     recorder.finish()
     sets = plain_eval.sets + (probe_eval.sets if probe_eval else []) + [st for c in candidates.values() for st in c.evaluate.sets]
     cases = [out / "cases" / st["key"] / f"test{j}" / f"case{k}.nc"   # this run's sets (the

@@ -105,7 +105,8 @@ def _padded(rows, fill):
     return out.astype(str) if fill == "" else out
 
 
-def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, point_test, plain_mean, probe_set=None):
+def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, point_test, plain_mean, plain_held,
+                 probe_set=None):
     units, long_name, _ = VARIABLES[lp["quantity"]]
     names = list(candidates)
     data = {
@@ -114,7 +115,7 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
         "point_test": ("point", point_test.astype(np.int32), {"units": "1", "long_name": "test of the point"}),
         "plain": (("test", "case", "cycle"), plain_set["curves"], {"units": units, "long_name": "plain model: simulated " + long_name}),
         "plain_prediction": ("point", plain_mean, {"units": units, "long_name": "plain model: ensemble mean at the point"}),
-        "plain_lpd": ("test", next(iter(candidates.values())).plain.lpd if candidates else np.full(len(measured), np.nan),
+        "plain_lpd": ("test", plain_held.lpd,
                       {"units": "1", "long_name": "plain model: log predictive density of the test's points (the noise model every model is judged under)"}),
         "candidate": (("effect", "set", "test", "case", "cycle"),
                       np.array([[s["curves"] for s in c.evaluate.sets[: len(c.thetas)]] for c in candidates.values()]),
@@ -141,7 +142,7 @@ def loop_dataset(lp, measured, plain_set, candidates, after, rows_before, y, poi
 
 
 def write_outputs(out, args, lp, measured, plain_set, plain_mean, candidates, evidence, chosen, after,
-                  base, untestable, minutes, probe_set=None):
+                  base, untestable, minutes, plain_held, probe_set=None):
     y = np.concatenate([v for _, v in measured])
     point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
     before = per_test_rows(args, lp, plain_set["curves"], measured)
@@ -153,7 +154,8 @@ def write_outputs(out, args, lp, measured, plain_set, plain_mean, candidates, ev
     horizon = dict(before=long_term(args, lp, plain_set["curves"]),
                    after=long_term(args, lp, after["curves"]) if after is not None else None)
     files = [out / "report.md", out / "loop.nc", out / "chosen.yaml", out / "curves.png"]
-    ds = loop_dataset(lp, measured, plain_set, candidates, after, before, y, point_test, plain_mean, probe_set)
+    ds = loop_dataset(lp, measured, plain_set, candidates, after, before, y, point_test, plain_mean, plain_held,
+                      probe_set)
     ds.attrs.update(tests_json=json.dumps(before), covariate_tests_json=json.dumps(cov), candidates_json=json.dumps(cands),
                     chosen=chosen or "none", material_parameters_json=json.dumps(base),
                     untestable_effects=", ".join(untestable) or "none")
