@@ -2,12 +2,14 @@
 itself with one candidate effect at a strength the data do not state (loop/synthetic.py:
 11-35 digitised points uneven in ln N, 1 % noise), then `ballaststudy loop` on them. Prints,
 per scenario, the effect chosen and each candidate's evidence (gain, tests better, Wilcoxon
-p, held-out RMSE against the plain model's). The scenarios' model runs share one case cache.
+p, held-out RMSE against the plain model's) and, per test, the planted effect's held-out RMSE
+over the plain model's. The scenarios' model runs share one case cache.
 The slow test tests/loop/test_undeclared.py asserts the same scenarios at their defaults.
 
     python bench/loop_undeclared.py OUT_DIR [none rate abrasion fouling end_restraint]
         [--cases K] [--cycles N] [--design-sets S]
         [--stones M --stone-size LO HI --ball-radius R]   # the library (m)
+        [--size-m W H]   # the specimens' width and height (m)
         [--fresh]    # the truth on K fresh specimens (their scatter too; specimen_share 1)
                      # instead of the loop's own (common random numbers; share 0)
 """
@@ -22,6 +24,17 @@ from ballaststudy.loop.synthetic import PLANTED, run_scenario, scenario_setup
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def per_test_rmse(loop_nc, effect):
+    """(plain, the effect's held-out) RMSE per test: the pooled RMSE is led by the test of
+    the largest strain (one specimen of K giving way under the effect is one such test)."""
+    import xarray as xr
+    with xr.open_dataset(loop_nc) as ds:
+        y, test = ds["measured"].values, ds["point_test"].values
+        held = ds["held_out_prediction"].values[list(ds["effect"].values).index(effect)]
+        plain = ds["plain_prediction"].values
+    return np.array([[np.sqrt(np.mean((y - m)[test == t] ** 2)) for m in (plain, held)] for t in np.unique(test)])
+
+
 def parse():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("out", type=Path)
@@ -32,19 +45,21 @@ def parse():
     ap.add_argument("--stones", type=int, default=24, help="stones in the library")
     ap.add_argument("--stone-size", type=float, nargs=2, default=[0.035, 0.065], metavar=("LO", "HI"))
     ap.add_argument("--ball-radius", type=float, default=0.008)
+    ap.add_argument("--size-m", type=float, nargs=2, default=None, metavar=("W", "H"))
     ap.add_argument("--fresh", action="store_true")
     return ap.parse_args()
 
 
 if __name__ == "__main__":
     args = parse()
+    size = {"size_m": tuple(args.size_m)} if args.size_m else {}
     library = dict(n_stones=args.stones, size=tuple(args.stone_size), r0=args.ball_radius)
     specimens, config, _ = scenario_setup(args.out, ROOT / "config/config.yaml", args.cases, args.cycles,
-                                          args.design_sets, 1.0 if args.fresh else 0.0, library)
+                                          args.design_sets, 1.0 if args.fresh else 0.0, library, **size)
     fresh = None
     if args.fresh:      # K more specimens of the same library (cases K .. 2K-1)
         fresh, _, _ = scenario_setup(args.out / "fresh", ROOT / "config/config.yaml", 2 * args.cases,
-                                     args.cycles, args.design_sets, 1.0, library)
+                                     args.cycles, args.design_sets, 1.0, library, **size)
         fresh = fresh[args.cases:]
     for name in args.scenarios:
         t0 = time.time()
@@ -54,3 +69,8 @@ if __name__ == "__main__":
         for c in candidates:
             print(f"    {c['effect']:13s} gain {c['gain']:9.3g}  {c['wins']}/{c['tests']} better  p {c['p']:.2g}  "
                   f"held-out RMSE {c['held_out_rmse']:.2e}  fitted {np.round(c['mean'], 3).tolist()}", flush=True)
+        if name != "none":
+            r = per_test_rmse(args.out / name / "loop" / "loop.nc", name)
+            print(f"    per test, {name}'s held-out RMSE / the plain model's: "
+                  + " ".join(f"{b / a:.2f}" for a, b in r) + "; plain RMSE " + " ".join(f"{a:.1e}" for a, _ in r),
+                  flush=True)
