@@ -110,10 +110,11 @@ def library_spec(library=None):
     return {**SCENARIO_LIBRARY, **(library or {})}
 
 
-def scenario_setup(folder, config_file, cases=3, cycles=12, design_sets=5, specimen_share=0.0,
+def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, specimen_share=0.0,
                    library=None, size_m=(0.12, 0.24)):
     """A synthetic BPM library, a config for the loop at this scale and ``cases`` assembled
-    biaxial specimens in ``folder``; returns (specimens, config, base parameters YAML)."""
+    biaxial specimens in ``folder``; returns (specimens, config, base parameters YAML). The
+    defaults are the slow test's scale (tests/loop/test_undeclared.py says why)."""
     from ..cli import main
     from ..rig.library import synthetic_library
     folder = Path(folder)
