@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ballaststudy.calibration.bayes import rmse
 from ballaststudy.loop.synthetic import PLANTED, run_scenario, scenario_setup
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,7 +33,7 @@ def per_test_rmse(loop_nc, effect):
         y, test = ds["measured"].values, ds["point_test"].values
         held = ds["held_out_prediction"].values[list(ds["effect"].values).index(effect)]
         plain = ds["plain_prediction"].values
-    return np.array([[np.sqrt(np.mean((y - m)[test == t] ** 2)) for m in (plain, held)] for t in np.unique(test)])
+    return np.array([[rmse(y[test == t], m[test == t]) for m in (plain, held)] for t in np.unique(test)])
 
 
 def parse():

@@ -55,7 +55,7 @@ import numpy as np
 from scipy.special import logsumexp
 from scipy.stats import qmc, wilcoxon
 
-from ..calibration.bayes import Surrogate, _box, _from_unit, weighted_quantile
+from ..calibration.bayes import Surrogate, _box, _from_unit, rmse, weighted_quantile
 
 SHRINK = 0.1          # weight of the diagonal in the shrunk case covariance
 ALPHA = 0.05          # family-wise level of the rule over the candidates
@@ -135,7 +135,7 @@ class HeldOut:
 
     def rmse(self, y, point_test, tests=None):
         sel = np.isin(point_test, np.unique(point_test) if tests is None else tests)
-        return float(np.sqrt(np.mean((np.asarray(y)[sel] - self.predicted[sel]) ** 2)))
+        return rmse(np.asarray(y)[sel], self.predicted[sel])
 
 
 def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed):

@@ -146,6 +146,7 @@ def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, 
 
     import xarray as xr
 
+    from ..calibration.bayes import rmse
     from ..cli import main
     folder = Path(folder)
     measured, conditions = plant(folder / name / "tests", SCENARIO_TESTS, truth_specimens or specimens,
@@ -161,5 +162,5 @@ def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, 
     chosen = yaml.safe_load((out / "chosen.yaml").read_text())["effect"]
     with xr.open_dataset(out / "loop.nc") as ds:
         candidates = json.loads(ds.attrs["candidates_json"])
-        plain = float(np.sqrt(np.mean((ds["measured"].values - ds["plain_prediction"].values) ** 2)))
+        plain = rmse(ds["measured"].values, ds["plain_prediction"].values)
     return (None if chosen == "none" else chosen), candidates, plain
