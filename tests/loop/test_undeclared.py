@@ -41,6 +41,19 @@ per-test ratio):
     end restraint chosen -57 %, rate and fouling taken for end restraint (fouling's gain
     4.90e4 against 4.92e4: on these specimens the platens' friction mimics both);
   - 5 specimens (p 25 -> 65): nothing chosen anywhere (one specimen strains 30-100x the others).
+Other test designs at this scale (24 cycles, 9 design sets; session 29, SCENARIO_TESTS
+patched, all else as landed):
+  - every p + 25 kPa (50-85, q 10-50): rate not chosen (5/8, p 0.12: its design sets'
+    errors scatter without a minimum, the rate signal drowned in chaos at these pressures),
+    abrasion -69 %, fouling -54 %, end restraint -87 %;
+  - q_max = p (one stress ratio, 1.0): rate not chosen (7/8, p 0.02; -54 %), abrasion -85 %,
+    fouling -66 %, end restraint not chosen (5/8; -84 %: at the low pressures its signal is
+    below the noise, those tests tie);
+  - q_max = 1.4 p: rate -68 %, abrasion -81 %, fouling chosen but +85 % (the p = 35 kPa
+    test, where a specimen gives way, 2.1x the plain model's error), end restraint taken
+    for abrasion (7/8 against 6/8).
+Each design names and halves three or four of the four effects; none all four. The landed
+design is as good as any (four of five scenarios).
 The negative control held at every scale. Which effect passes moves with the scale: the
 pooled RMSE is led by the one test where a specimen of three gives way under the effect
 (there the held-out prediction misses by up to 0.9x the plain model's error), while per test
