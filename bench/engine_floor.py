@@ -13,6 +13,8 @@ printing the fastest of 5 such timings in us:
             stored per contact and added to both balls, the same touch test - no frame, no
             square root or division, no Coulomb limit. What the loop costs before its
             arithmetic.
+  loads     the skeleton's loads alone: the list entries and both balls' rows, summed into
+            one number, nothing stored. What any loop over this list costs at the least.
   walls, first, second, rebuild   the ball-wall loop, the two half steps, one neighbour
             rebuild.
 All but the rebuild run with dt = 0: nothing moves and no shear history grows, so every
@@ -78,6 +80,22 @@ def skeleton(kin, fa, pr, scale):
         fa[j, 2] += f
 
 
+@njit(**LOOP)
+def loads(kin, pr):
+    """The skeleton's loads with nothing stored: the list's i, j and both balls' rows."""
+    acc = 0.0
+    for p in range(pr.n[0]):
+        i = pr.i[p]
+        j = pr.j[p]
+        dx = kin[j, 0] - kin[i, 0]
+        dy = kin[j, 1] - kin[i, 1]
+        rs = kin[i, 5] + kin[j, 5]
+        f = (rs * rs - dx * dx - dy * dy + kin[j, 2] - kin[i, 2] + kin[j, 3] - kin[i, 3]
+             + kin[i, 4] + kin[j, 4] + kin[i, 6] + kin[j, 6])
+        acc += f if dx * dx + dy * dy < rs * rs else 0.0
+    return acc
+
+
 def make_kernels(law):
     """The timing loops, with the law bound as a compile-time constant (dem/bound.py)."""
     @njit
@@ -89,6 +107,13 @@ def make_kernels(law):
     def skel(reps, kin, fa, pr):
         for _ in range(reps):
             skeleton(kin, fa, pr, 1e-30)
+
+    @njit
+    def load(reps, kin, pr):
+        acc = 0.0
+        for _ in range(reps):
+            acc += loads(kin, pr)
+        return acc
 
     @njit
     def walls(reps, run, kin, fa, w, wp):
@@ -109,7 +134,7 @@ def make_kernels(law):
     def rebuild(reps, run, b, w, pr, wp, bo):
         for _ in range(reps):
             E.rebuild_lists(run, b, w, pr, wp, bo)
-    return dict(pair=pair, skeleton=skel, walls=walls, first=first, second=second,
+    return dict(pair=pair, skeleton=skel, loads=load, walls=walls, first=first, second=second,
                 rebuild=rebuild)
 
 
@@ -140,6 +165,7 @@ def snapshot(sim, kernels, reps):
     still.prm[P.DT] = 0.0
     r["pair"] = best_us(kernels["pair"], (still, kin, fa, pr, bo.active), reps)
     r["skeleton"] = best_us(kernels["skeleton"], (kin, fa, pr), reps)
+    r["loads"] = best_us(kernels["loads"], (kin, pr), reps)
     r["walls"] = best_us(kernels["walls"], (still, kin, fa, w, wp), reps)
     r["first"] = best_us(kernels["first"], (still.prm, kin, fa, b, cl), reps)
     r["second"] = best_us(kernels["second"], (still.prm, kin, fa, b, still.eacc), reps)
@@ -157,7 +183,7 @@ def main(argv=None):
     sim = settle2d.build(a.n)
     sim.run(1)
     kernels = make_kernels(sim._layout)
-    cols = ("pair", "skeleton", "walls", "first", "second", "rebuild")
+    cols = ("pair", "skeleton", "loads", "walls", "first", "second", "rebuild")
     print(f"settle2d N={a.n}: us per call, fastest of 5 x {a.reps} (rebuild: x {max(1, a.reps // 10)})")
     print(f"{'step':>6} {'pairs':>6} {'touching':>8} " + " ".join(f"{c:>9}" for c in cols)
           + f" {'pair-skeleton':>13} {'floor':>7}")
