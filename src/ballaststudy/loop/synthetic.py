@@ -20,6 +20,7 @@ import numpy as np
 import yaml
 
 POINTS = (11, 35)           # digitised points per curve, as in the shared measured data
+NOISE_SHARE = 0.01          # the digitiser's noise, sd as a share of the curve's final value
 
 
 @dataclass(frozen=True)
@@ -51,20 +52,49 @@ def digitise(curve, rng, noise_share, points=POINTS):
     return n, value + rng.normal(0.0, noise_share * abs(curve[-1]), m)
 
 
-def truth_curves(tests_yaml, specimens, config, cycles, out_dir, effect=None, values=None,
-                 base=None, jobs=1):
-    """(T, cycles) ensemble-mean axial strain of ``specimens`` under each test with
-    ``effect`` at ``values`` (None: the plain model), cases cached under out_dir/cases."""
+def truth_runs(tests_yaml, specimens, config, cycles, out_dir, effect=None, values=None,
+               base=None, jobs=1, perturbation_m_s=0.0):
+    """(T, K, cycles) axial strain of each of ``specimens`` under each test with ``effect``
+    at ``values`` (None: the plain model), cases cached under out_dir/cases; from velocities
+    perturbed by ``perturbation_m_s`` if > 0 (a chaos probe of the truth)."""
     from ..calibration.runner import Evaluator
     values = dict(values or {})
     evaluate = Evaluator(list(values), specimens, [(c, np.arange(1.0, cycles + 1)) for c in tests_yaml],
-                         config, cycles, "axial_strain", out_dir, jobs=jobs, effect=effect, base=base)
+                         config, cycles, "axial_strain", out_dir, jobs=jobs, effect=effect, base=base,
+                         perturbation_m_s=perturbation_m_s)
     evaluate(np.array([list(values.values())]))
-    return evaluate.sets[0]["curves"].mean(axis=1)
+    return evaluate.sets[0]["curves"]
+
+
+def truth_curves(tests_yaml, specimens, config, cycles, out_dir, effect=None, values=None,
+                 base=None, jobs=1):
+    """(T, cycles) ensemble-mean axial strain: truth_runs averaged over the specimens."""
+    return truth_runs(tests_yaml, specimens, config, cycles, out_dir, effect, values, base, jobs).mean(axis=1)
+
+
+def irreducible_rmse(runs, probe, cycles, point_test, noise_sd):
+    """(per test (T,), pooled) RMSE that no prediction made from runs at other parameter
+    values can beat on planted tests: the chaos the truth's ensemble mean carries (runs and
+    probe (T, K, cycles): the truth's runs and the same runs from perturbed velocities, as
+    select.chaos_covariance) plus the digitiser's noise (sd per test), at the measured
+    points (``cycles``, ``point_test``). The truth is one chaotic draw about the effect's
+    smooth trend; a surrogate over other parameter values predicts at best that trend."""
+    from ..calibration.runner import at_points
+    from .select import chaos_covariance
+    cycles, point_test = np.asarray(cycles, float), np.asarray(point_test)
+    per_point = np.empty(len(cycles))
+    for t in range(len(runs)):
+        sel = point_test == t
+        r = np.array([at_points(c, cycles[sel]) for c in runs[t]])
+        q = np.array([at_points(c, cycles[sel]) for c in probe[t]])
+        chaos = np.diag(chaos_covariance(r, q, np.zeros(sel.sum()), 0)) / len(r)   # of the K-mean
+        per_point[sel] = chaos + noise_sd[t] ** 2
+    per_test = np.array([math.sqrt(per_point[point_test == t].mean()) for t in range(len(runs))])
+    return per_test, math.sqrt(per_point.mean())
 
 
 def plant(folder, tests, specimens, config, cycles, effect=None, values=None, base=None,
-          noise_share=0.01, seed=0, cache=None, jobs=1):
+          noise_share=NOISE_SHARE, seed=0, cache=None, jobs=1):
     """Write the planted tests t<j>.yaml / t<j>.dat / t<j>.nc into ``folder``; returns
     (measured netCDFs, conditions YAMLs). The truth's cases go to ``cache`` (default folder)."""
     from ..measured.importer import import_test
