@@ -48,26 +48,35 @@ from ballaststudy.dem import walls as W  # noqa: E402
 from ballaststudy.dem.jit import LOOP  # noqa: E402
 
 
+@njit(**LOOP, inline="always")
+def both_rows(kin, pr, p):
+    """List entry p's balls i, j, their distance (dx, dy), squared d2, contact reach rs
+    and the trivial law's value f (every float of both rows read once)."""
+    i = pr.i[p]
+    j = pr.j[p]
+    dx = kin[j, 0] - kin[i, 0]
+    dy = kin[j, 1] - kin[i, 1]
+    rs = kin[i, 5] + kin[j, 5]
+    d2 = dx * dx + dy * dy
+    f = (rs * rs - d2 + kin[j, 2] - kin[i, 2] + kin[j, 3] - kin[i, 3]
+         + kin[i, 4] + kin[j, 4] + kin[i, 6] + kin[j, 6])
+    return i, j, dx, dy, d2, rs, f
+
+
 @njit(**LOOP)
 def skeleton(kin, fa, pr, scale):
     """The pair loop's loads and stores around a trivial law (see the module doc)."""
     hist, p_fn, p_fs = pr.hist, pr.fn, pr.fs
     width = hist.shape[1]
     for p in range(pr.n[0]):
-        i = pr.i[p]
-        j = pr.j[p]
-        dx = kin[j, 0] - kin[i, 0]
-        dy = kin[j, 1] - kin[i, 1]
-        rs = kin[i, 5] + kin[j, 5]
-        d2 = dx * dx + dy * dy
+        i, j, dx, dy, d2, rs, f = both_rows(kin, pr, p)
         if d2 >= rs * rs:
             for c in range(width):
                 hist[p, c] = 0.0
             p_fn[p] = 0.0
             p_fs[p] = 0.0
             continue
-        f = scale * (rs * rs - d2 + kin[j, 2] - kin[i, 2] + kin[j, 3] - kin[i, 3]
-                     + kin[i, 4] + kin[j, 4] + kin[i, 6] + kin[j, 6])
+        f *= scale
         for c in range(width):
             hist[p, c] = scale * hist[p, c] + f
         p_fn[p] = f * dx
@@ -85,14 +94,8 @@ def loads(kin, pr):
     """The skeleton's loads with nothing stored: the list's i, j and both balls' rows."""
     acc = 0.0
     for p in range(pr.n[0]):
-        i = pr.i[p]
-        j = pr.j[p]
-        dx = kin[j, 0] - kin[i, 0]
-        dy = kin[j, 1] - kin[i, 1]
-        rs = kin[i, 5] + kin[j, 5]
-        f = (rs * rs - dx * dx - dy * dy + kin[j, 2] - kin[i, 2] + kin[j, 3] - kin[i, 3]
-             + kin[i, 4] + kin[j, 4] + kin[i, 6] + kin[j, 6])
-        acc += f if dx * dx + dy * dy < rs * rs else 0.0
+        _, _, _, _, d2, rs, f = both_rows(kin, pr, p)
+        acc += f if d2 < rs * rs else 0.0
     return acc
 
 
