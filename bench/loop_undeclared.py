@@ -15,6 +15,7 @@ The slow test tests/loop/test_undeclared.py asserts the same scenarios at their 
         [--size-m W H]   # the specimens' width and height (m)
         [--fresh]    # the truth on K fresh specimens (their scatter too; specimen_share 1)
                      # instead of the loop's own (common random numbers; share 0)
+        [--probes M]  # chaos probes of each truth for its irreducible RMSE (default 3)
 """
 import argparse
 import time
@@ -41,14 +42,15 @@ def per_test_rmse(loop_nc, effect):
     return np.array([[rmse(y[test == t], m[test == t]) for m in (plain, held)] for t in np.unique(test)])
 
 
-def attainable(out, name, specimens, cycles, plain_per_test, plain):
+def attainable(out, name, specimens, cycles, plain_per_test, plain, probes):
     """Print the planted scenario's irreducible RMSE (synthetic.irreducible_rmse: the truth
-    run again from perturbed velocities, K more cases) against its plain model's: the
-    goal - half the plain RMSE - is out of any surrogate's reach where it is above half."""
+    run again from ``probes`` perturbations, K more cases each) against its plain model's:
+    the goal - half the plain RMSE - is out of any surrogate's reach where it is above half."""
     import xarray as xr
     conditions = [out / name / "tests" / f"t{j}.yaml" for j in range(len(SCENARIO_TESTS))]
     run = [conditions, specimens, out / "config.yaml", cycles, out, name, PLANTED[name], SCENARIO_BASE, 2]
-    runs, probe = truth_runs(*run), truth_runs(*run, perturbation_m_s=PROBE_M_S)
+    runs = truth_runs(*run)
+    probe = [truth_runs(*run, perturbation_m_s=PROBE_M_S, probe=m) for m in range(probes)]
     with xr.open_dataset(out / name / "loop" / "loop.nc") as ds:
         n, test = ds["measured_cycle"].values, ds["point_test"].values
     per_test, pooled = irreducible_rmse(runs, probe, n, test, NOISE_SHARE * np.abs(runs.mean(axis=1)[:, -1]))
@@ -69,6 +71,7 @@ def parse():
     ap.add_argument("--ball-radius", type=float, default=0.008)
     ap.add_argument("--size-m", type=float, nargs=2, default=None, metavar=("W", "H"))
     ap.add_argument("--fresh", action="store_true")
+    ap.add_argument("--probes", type=int, default=3, help="chaos probes of each truth (irreducible RMSE)")
     return ap.parse_args()
 
 
@@ -97,4 +100,4 @@ if __name__ == "__main__":
                   + " ".join(f"{b / a:.2f}" for a, b in r) + "; plain RMSE " + " ".join(f"{a:.1e}" for a, _ in r),
                   flush=True)
             if not args.fresh:      # fresh truths carry their specimens' offsets as well
-                attainable(args.out, name, specimens, args.cycles, r[:, 0], plain)
+                attainable(args.out, name, specimens, args.cycles, r[:, 0], plain, args.probes)

@@ -169,7 +169,8 @@ def test_several_targets_make_one_curve(specimen, tmp_path, fast_config, planted
 def test_the_chaos_probe_is_a_set_of_its_own(specimen, tmp_path, fast_config, planted_conditions):
     """The plain set run again from velocities perturbed by 1e-9 m/s (loop.select's chaos
     probe): its own cache key (none in the plain set's context: its cached cases stay valid),
-    each case seeded by its index; the curve moves, but by chaos, not by a new specimen."""
+    each case seeded by its index; the curve moves, but by chaos, not by a new specimen.
+    Another probe (perturbation_seed 1) is a set of its own again, its direction another."""
     from ballaststudy.calibration.runner import Evaluator
     config, c = fast_config(tmp_path), planted_conditions(tmp_path / "t.yaml", 50.0)
     make = lambda **kw: Evaluator([], [specimen], [(c, np.array([1.0, 2.0]))], config, 2, "axial_strain",
@@ -181,3 +182,7 @@ def test_the_chaos_probe_is_a_set_of_its_own(specimen, tmp_path, fast_config, pl
     assert probe_key != key and probe_jobs[0][0]["perturbation_seed"] == 0
     a, b = plain(np.zeros((1, 0)))[0], probe(np.zeros((1, 0)))[0]
     assert not np.array_equal(a, b) and np.all(np.abs(a - b) < 0.5 * np.abs(a))
+    other = make(perturbation_m_s=1e-9, perturbation_seed=1)
+    other_key, other_jobs = other.jobs_for({})
+    assert "perturbation_seed" not in probe.context and other_jobs[0][0]["perturbation_seed"] == 1
+    assert other_key not in (key, probe_key) and not np.array_equal(other(np.zeros((1, 0)))[0], b)

@@ -98,13 +98,13 @@ class Evaluator:
     (T, K, cycles) and failures (``self.sets``)."""
 
     def __init__(self, names, specimens, tests, config, cycles, quantity, out_dir, jobs=1,
-                 progress=False, effect=None, base=None, perturbation_m_s=0.0):
+                 progress=False, effect=None, base=None, perturbation_m_s=0.0, perturbation_seed=0):
         """tests: [(conditions YAML, measured N within the cycles)], one per target;
         ``names``: the parameters varied - material ones, or ``effect``'s (loop.effects)
         with the material parameters fixed at ``base`` ({name: value}; {}: Table 4.2's);
         ``perturbation_m_s`` > 0: every case starts from its specimen's velocities perturbed
-        by that much (Simulation.perturb_velocities, seeded by the case index): the chaos
-        probe of loop.select."""
+        by that much (Simulation.perturb_velocities, seeded by ``perturbation_seed`` + the
+        case index): the chaos probe of loop.select."""
         from ..config import load_config
         from ..measured.importer import load_conditions
         from ..rig.kinds import kind_of, params_from_config
@@ -124,7 +124,7 @@ class Evaluator:
             self.tests.append(dict(conditions=str(conditions), points=np.asarray(points, float),
                                    rig=params.to_dict(), covariates=loaded.get("covariates") or {}))
         self.effect, self.base = effect, dict(base or {})
-        self.perturbation_m_s = float(perturbation_m_s)
+        self.perturbation_m_s, self.perturbation_seed = float(perturbation_m_s), int(perturbation_seed)
         # the covariates too: an effect may act through one (fouling through VCI), and a
         # test's VCI edited must not reuse cases run at the old one
         self.context = {"cycles": self.cycles, "rig": [t["rig"] for t in self.tests],
@@ -132,7 +132,8 @@ class Evaluator:
                         "metrics": self.metrics, "effect": effect, "base": self.base,
                         "specimens": [Path(s).name for s in self.specimens],
                         # only when on: the unperturbed sets keep their cache keys
-                        **({"perturbation_m_s": self.perturbation_m_s} if self.perturbation_m_s else {})}
+                        **({"perturbation_m_s": self.perturbation_m_s} if self.perturbation_m_s else {}),
+                        **({"perturbation_seed": self.perturbation_seed} if self.perturbation_seed else {})}
         self.sets = []
 
     def jobs_for(self, values):
@@ -143,7 +144,8 @@ class Evaluator:
         return key, [[dict(specimen=s, values=material, cycles=self.cycles, rig=t["rig"],
                            effect=self.effect, effect_values=effect_values,
                            metrics=self.metrics, conditions=t["conditions"],
-                           perturbation_m_s=self.perturbation_m_s, perturbation_seed=k,
+                           perturbation_m_s=self.perturbation_m_s,
+                           perturbation_seed=self.perturbation_seed + k,
                            out=str(self.out_dir / "cases" / key / f"test{j}" / f"case{k}.nc"))
                       for k, s in enumerate(self.specimens)] for j, t in enumerate(self.tests)]
 

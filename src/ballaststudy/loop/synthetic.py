@@ -53,15 +53,16 @@ def digitise(curve, rng, noise_share, points=POINTS):
 
 
 def truth_runs(tests_yaml, specimens, config, cycles, out_dir, effect=None, values=None,
-               base=None, jobs=1, perturbation_m_s=0.0):
+               base=None, jobs=1, perturbation_m_s=0.0, probe=0):
     """(T, K, cycles) axial strain of each of ``specimens`` under each test with ``effect``
     at ``values`` (None: the plain model), cases cached under out_dir/cases; from velocities
-    perturbed by ``perturbation_m_s`` if > 0 (a chaos probe of the truth)."""
+    perturbed by ``perturbation_m_s`` if > 0 (a chaos probe of the truth; probes 0, 1, ...
+    perturb in independent directions)."""
     from ..calibration.runner import Evaluator
     values = dict(values or {})
     evaluate = Evaluator(list(values), specimens, [(c, np.arange(1.0, cycles + 1)) for c in tests_yaml],
                          config, cycles, "axial_strain", out_dir, jobs=jobs, effect=effect, base=base,
-                         perturbation_m_s=perturbation_m_s)
+                         perturbation_m_s=perturbation_m_s, perturbation_seed=probe * len(specimens))
     evaluate(np.array([list(values.values())]))
     return evaluate.sets[0]["curves"]
 
@@ -72,24 +73,25 @@ def truth_curves(tests_yaml, specimens, config, cycles, out_dir, effect=None, va
     return truth_runs(tests_yaml, specimens, config, cycles, out_dir, effect, values, base, jobs).mean(axis=1)
 
 
-def irreducible_rmse(runs, probe, cycles, point_test, noise_sd):
+def irreducible_rmse(runs, probes, cycles, point_test, noise_sd):
     """(per test (T,), pooled) RMSE that no prediction made from runs at other parameter
-    values can beat on planted tests: the chaos the truth's ensemble mean carries (runs and
-    probe (T, K, cycles): the truth's runs and the same runs from perturbed velocities, as
-    select.chaos_covariance) plus the digitiser's noise (sd per test), at the measured
-    points (``cycles``, ``point_test``). The truth is one chaotic draw about the effect's
-    smooth trend; a surrogate over other parameter values predicts at best that trend."""
+    values can beat on planted tests: the chaos the truth's ensemble mean carries plus the
+    digitiser's noise (sd per test), at the measured points (``cycles``, ``point_test``).
+    runs (T, K, cycles): the truth's runs; probes (M, T, K, cycles): the same runs from
+    velocities perturbed M times, each an independent chaos draw (loop.select's probe is
+    M = 1). The chaos variance of one run is the sample variance of its M + 1 draws; of the
+    K-mean, the specimens' average of it over K. The truth is one chaotic draw about the
+    effect's smooth trend; a surrogate over other parameter values predicts at best that
+    trend."""
     from ..calibration.runner import at_points
-    from .select import chaos_covariance
     cycles, point_test = np.asarray(cycles, float), np.asarray(point_test)
+    draws = np.concatenate([np.asarray(runs)[None], np.asarray(probes)])      # (M + 1, T, K, cycles)
     per_point = np.empty(len(cycles))
-    for t in range(len(runs)):
+    for t in range(draws.shape[1]):
         sel = point_test == t
-        r = np.array([at_points(c, cycles[sel]) for c in runs[t]])
-        q = np.array([at_points(c, cycles[sel]) for c in probe[t]])
-        chaos = np.diag(chaos_covariance(r, q, np.zeros(sel.sum()), 0)) / len(r)   # of the K-mean
-        per_point[sel] = chaos + noise_sd[t] ** 2
-    per_test = np.array([math.sqrt(per_point[point_test == t].mean()) for t in range(len(runs))])
+        at = np.array([[at_points(c, cycles[sel]) for c in m[t]] for m in draws])   # (M + 1, K, P_t)
+        per_point[sel] = at.var(axis=0, ddof=1).mean(axis=0) / at.shape[1] + noise_sd[t] ** 2
+    per_test = np.array([math.sqrt(per_point[point_test == t].mean()) for t in range(draws.shape[1])])
     return per_test, math.sqrt(per_point.mean())
 
 
