@@ -76,7 +76,8 @@ def test_negative_control_changes_nothing(scenarios):
 
 
 GOAL_NOT_MET = pytest.mark.xfail(strict=True, raises=AssertionError,
-                                  reason="issue 14: end restraint is chaos-limited at this scale (the truth's irreducible RMSE 0.45 of the plain model's)")
+                                  reason="issue 14: end restraint is chaos-limited at this scale "
+                                         "(the truth's irreducible RMSE 0.45 of the plain model's)")
 
 
 def _named_and_halved(folder, specimens, effect):
