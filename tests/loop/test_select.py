@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ballaststudy.calibration.bayes import initial_design
-from ballaststudy.loop.select import (chaos_covariance, choose, fit_all, held_out_candidate, held_out_plain,
+from ballaststudy.loop.select import (SHRINK, chaos_covariance, choose, fit_all, held_out_candidate, held_out_plain,
                                       residual_covariances)
 
 TESTS = 7
@@ -156,7 +156,8 @@ def test_the_chaos_probe_measures_the_chaos_not_the_specimens():
     the diagonal of the chaos covariance is the chaos variance (within sampling error,
     K = 400: +-15 % would catch a factor sqrt(2) or 2), the offsets do not enter; with
     specimen_share 0 the residual covariance is chaos / K + measurement, about the plain
-    mean one chaos / K more (its own draw)."""
+    mean one chaos / K more (its own draw). One probe: half the covariance of the difference
+    (shrunk); three probes: the chaos variance again, within a narrower sampling error."""
     rng = np.random.default_rng(9)
     n, point_test = _points(rng)
     k, chaos = 400, 2e-4
@@ -168,5 +169,12 @@ def test_the_chaos_probe_measures_the_chaos_not_the_specimens():
         assert np.allclose(np.diag(cov), chaos ** 2, rtol=0.15)
         assert np.allclose(covs[t], cov / k + MEAS_SD ** 2 * np.eye(len(cov)), rtol=1e-12, atol=1e-20)
         assert np.allclose(plain_covs[t], covs[t] + cov / k, rtol=1e-12, atol=1e-20)
+    probes = np.array([_specimens(rng, n, point_test, None, 0.0, k, offsets, chaos) for _ in range(3)])
+    for t in range(TESTS):
+        d = (runs - probe)[:, point_test == t]
+        half = d.T @ d / (2 * k)
+        assert np.allclose(chaos_covariance(runs, probe, point_test, t),
+                           (1 - SHRINK) * half + SHRINK * np.diag(np.diag(half)), rtol=1e-10, atol=0)
+        assert np.allclose(np.diag(chaos_covariance(runs, probes, point_test, t)), chaos ** 2, rtol=0.1)
     with pytest.raises(ValueError, match="probe"):
         residual_covariances(runs, point_test, MEAS_SD ** 2, specimen_share=0.0)

@@ -7,7 +7,6 @@ import yaml
 
 from ballaststudy.loop.synthetic import (POINTS, SCENARIO_LIBRARY, SCENARIO_TESTS, PlantedTest,
                                         digitise, irreducible_rmse, library_spec)
-from ballaststudy.loop.select import chaos_covariance
 from ballaststudy.measured.importer import import_test, load_conditions
 
 
@@ -66,7 +65,7 @@ def test_irreducible_rmse_is_the_chaos_of_the_truths_mean_plus_the_noise():
     of sd s per point, each probe another; the K-mean scatters by s / sqrt(K) about the
     trend, and with digitiser noise sd e the floor is sqrt(s^2 / K + e^2), per test and
     pooled (a factor of 2 in either term, or a probe's draw counted as the difference of
-    two, would show). One probe gives the chaos variance of loop.select's chaos covariance."""
+    two, would show)."""
     rng = np.random.default_rng(0)
     k, cycles = 400, 30
     trend = np.linspace(1e-4, 3e-4, cycles)
@@ -79,7 +78,4 @@ def test_irreducible_rmse_is_the_chaos_of_the_truths_mean_plus_the_noise():
     expect = np.sqrt(sd ** 2 / k + noise ** 2)
     np.testing.assert_allclose(per_test, expect, rtol=0.05)
     np.testing.assert_allclose(pooled, np.sqrt(np.mean(expect ** 2)), rtol=0.05)
-    one, _ = irreducible_rmse(runs[0], probes[:1], n, test, np.zeros(2))
-    chaos = [np.diag(chaos_covariance(runs[0][t], probes[0][t], np.zeros(cycles), 0)).mean() / k for t in (0, 1)]
-    np.testing.assert_allclose(one ** 2, chaos, rtol=1e-12)
     np.testing.assert_array_equal(irreducible_rmse(runs[0], runs, n, test, np.zeros(2))[0], 0.0)

@@ -86,12 +86,16 @@ def _mvn_logpdf(r, cov):
 
 
 def chaos_covariance(runs, probe, point_test, test):
-    """(P_t, P_t) covariance of the chaos of one run at test ``test``'s points: runs and
-    probe (K, P) the same K specimens run twice, the probe from perturbed states, so each
-    difference is two independent chaos draws (its mean is zero: K degrees of freedom)."""
+    """(P_t, P_t) covariance of the chaos of one run at test ``test``'s points: runs (K, P)
+    and probe (K, P), or (M, K, P) for M probes, the same K specimens run again from
+    perturbed states, each an independent chaos draw: per specimen, the covariance of its
+    M + 1 draws about their mean (M degrees of freedom; one probe: half the covariance of
+    the difference, whose mean is zero)."""
     sel = np.asarray(point_test) == test
-    d = np.asarray(runs)[:, sel] - np.asarray(probe)[:, sel]
-    return _shrunk(d.T @ d / (2 * len(d)))
+    runs = np.asarray(runs)
+    draws = np.concatenate([runs[None], np.asarray(probe).reshape(-1, *runs.shape)])[:, :, sel]
+    dev = (draws - draws.mean(axis=0)).reshape(-1, sel.sum())
+    return _shrunk(dev.T @ dev / (len(runs) * (len(draws) - 1)))
 
 
 def residual_covariances(plain, point_test, measurement_var, specimen_share=1.0, probe=None):

@@ -75,24 +75,23 @@ def truth_curves(tests_yaml, specimens, config, cycles, out_dir, effect=None, va
 
 def irreducible_rmse(runs, probes, cycles, point_test, noise_sd):
     """(per test (T,), pooled) RMSE that no prediction made from runs at other parameter
-    values can beat on planted tests: the chaos the truth's ensemble mean carries plus the
-    digitiser's noise (sd per test), at the measured points (``cycles``, ``point_test``).
-    runs (T, K, cycles): the truth's runs; probes (M, T, K, cycles): the same runs from
-    velocities perturbed M times, each an independent chaos draw (loop.select's probe is
-    M = 1). The chaos variance of one run is the sample variance of its M + 1 draws; of the
-    K-mean, the specimens' average of it over K. The truth is one chaotic draw about the
-    effect's smooth trend; a surrogate over other parameter values predicts at best that
-    trend."""
+    values can beat on planted tests: the chaos the truth's ensemble mean carries
+    (select.chaos_covariance / K) plus the digitiser's noise (sd per test), at the measured
+    points (``cycles``, ``point_test``). runs (T, K, cycles): the truth's runs; probes
+    (M, T, K, cycles): the same runs from velocities perturbed M times. The truth is one
+    chaotic draw about the effect's smooth trend; a surrogate over other parameter values
+    predicts at best that trend. Points grouped by test, 0 first, as the loop's."""
     from ..calibration.runner import at_points
+    from .select import chaos_covariance
     cycles, point_test = np.asarray(cycles, float), np.asarray(point_test)
-    draws = np.concatenate([np.asarray(runs)[None], np.asarray(probes)])      # (M + 1, T, K, cycles)
-    per_point = np.empty(len(cycles))
-    for t in range(draws.shape[1]):
-        sel = point_test == t
-        at = np.array([[at_points(c, cycles[sel]) for c in m[t]] for m in draws])   # (M + 1, K, P_t)
-        per_point[sel] = at.var(axis=0, ddof=1).mean(axis=0) / at.shape[1] + noise_sd[t] ** 2
-    per_test = np.array([math.sqrt(per_point[point_test == t].mean()) for t in range(draws.shape[1])])
-    return per_test, math.sqrt(per_point.mean())
+    tests = range(len(runs))
+
+    def at(curves):                      # (T, K, cycles) -> (K, P) at the measured points
+        return np.concatenate([[at_points(c, cycles[point_test == t]) for c in curves[t]] for t in tests], axis=1)
+    runs_at, probes_at = at(runs), np.array([at(p) for p in probes])
+    per_test = [np.diag(chaos_covariance(runs_at, probes_at, point_test, t)) / len(runs_at) + noise_sd[t] ** 2
+                for t in tests]
+    return np.sqrt([v.mean() for v in per_test]), math.sqrt(np.concatenate(per_test).mean())
 
 
 def plant(folder, tests, specimens, config, cycles, effect=None, values=None, base=None,
