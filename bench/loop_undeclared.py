@@ -10,7 +10,7 @@ of halving is out of reach at that scale. The scenarios' model runs share one ca
 The slow test tests/loop/test_undeclared.py asserts the same scenarios at their defaults.
 
     python bench/loop_undeclared.py OUT_DIR [none rate abrasion fouling end_restraint]
-        [--cases K] [--cycles N] [--design-sets S]
+        [--cases K] [--cycles N] [--design-sets S] [--refine-rounds R] [--refine-sets S]
         [--stones M --stone-size LO HI --ball-radius R]   # the library (m)
         [--size-m W H]   # the specimens' width and height (m)
         [--fresh]    # the truth on K fresh specimens (their scatter too; specimen_share 1)
@@ -66,6 +66,8 @@ def parse():
     ap.add_argument("--cases", type=int, default=3)
     ap.add_argument("--cycles", type=int, default=24)
     ap.add_argument("--design-sets", type=int, default=9)
+    ap.add_argument("--refine-rounds", type=int, default=2)
+    ap.add_argument("--refine-sets", type=int, default=4)
     ap.add_argument("--stones", type=int, default=24, help="stones in the library")
     ap.add_argument("--stone-size", type=float, nargs=2, default=[0.035, 0.065], metavar=("LO", "HI"))
     ap.add_argument("--ball-radius", type=float, default=0.008)
@@ -77,14 +79,15 @@ def parse():
 
 if __name__ == "__main__":
     args = parse()
-    size = {"size_m": tuple(args.size_m)} if args.size_m else {}
+    setup = {"size_m": tuple(args.size_m)} if args.size_m else {}
+    setup.update(refine_rounds=args.refine_rounds, refine_sets=args.refine_sets)
     library = dict(n_stones=args.stones, size=tuple(args.stone_size), r0=args.ball_radius)
     specimens, config, _ = scenario_setup(args.out, ROOT / "config/config.yaml", args.cases, args.cycles,
-                                          args.design_sets, 1.0 if args.fresh else 0.0, library, **size)
+                                          args.design_sets, 1.0 if args.fresh else 0.0, library, **setup)
     fresh = None
     if args.fresh:      # K more specimens of the same library (cases K .. 2K-1)
         fresh, _, _ = scenario_setup(args.out / "fresh", ROOT / "config/config.yaml", 2 * args.cases,
-                                     args.cycles, args.design_sets, 1.0, library, **size)
+                                     args.cycles, args.design_sets, 1.0, library, **setup)
         fresh = fresh[args.cases:]
     for name in args.scenarios:
         t0 = time.time()
@@ -93,7 +96,8 @@ if __name__ == "__main__":
               f"{(time.time() - t0) / 60:.1f} min", flush=True)
         for c in candidates:
             print(f"    {c['effect']:13s} gain {c['gain']:9.3g}  {c['wins']}/{c['tests']} better  p {c['p']:.2g}  "
-                  f"held-out RMSE {c['held_out_rmse']:.2e}  fitted {np.round(c['mean'], 3).tolist()}", flush=True)
+                  f"held-out RMSE {c['held_out_rmse']:.2e}  fitted {np.round(c['mean'], 3).tolist()} "
+                  f"(90 % {np.round(c['interval90'], 3).tolist()})", flush=True)
         if name != "none":
             r = per_test_rmse(args.out / name / "loop" / "loop.nc", name)
             print(f"    per test, {name}'s held-out RMSE / the plain model's: "

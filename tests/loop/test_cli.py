@@ -20,8 +20,8 @@ def _config(folder, **loop):
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
     cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    cfg["loop"].update(dict(cases=2, cycles=5, design_sets=2, effects=["end_restraint", "fouling"],
-                            measurement_sd=1e-4, posterior_samples=256), **loop)
+    cfg["loop"].update(dict(cases=2, cycles=5, design_sets=2, refine_rounds=1, refine_sets=2,
+                            effects=["end_restraint", "fouling"], measurement_sd=1e-4, posterior_samples=256), **loop)
     path = Path(folder) / "config.yaml"
     path.write_text(yaml.safe_dump(cfg))
     return path
@@ -68,7 +68,9 @@ def test_loop_end_to_end(tiny, tmp_path):
     assert "**No effect chosen**" in text
     assert yaml.safe_load((out / "chosen.yaml").read_text())["effect"] == "none"
     with xr.open_dataset(out / "loop.nc") as ds:
-        assert ds["plain"].shape == (3, 2, 5) and ds["candidate"].shape == (1, 2, 3, 2, 5)
+        assert ds["plain"].shape == (3, 2, 5) and ds["candidate"].shape == (1, 4, 3, 2, 5)
+        refined = ds["candidate_value"].values[0, 2:, 0]       # the grid's 2 sets, then 1 round of 2
+        assert np.all((refined > 0.0) & (refined < 1.2)) and refined[0] < refined[1]
         assert ds["measured"].size == 15                  # 5 points per test within N <= 5
         assert list(ds["effect"].values) == ["end_restraint"] and ds.attrs["untestable_effects"] == "fouling"
         assert ds["plain"].attrs["units"] == "1" and ds.attrs["Conventions"] == "CF-1.8"
@@ -79,7 +81,8 @@ def test_loop_end_to_end(tiny, tmp_path):
     assert cands[0]["tests"] == 3 and 0.0 <= cands[0]["mean"][0] <= 1.2
     assert (out / "curves.png").is_file() and (out / "report.md.prov.json").is_file()
     cached = sorted((out / "cases").rglob("*.nc"))
-    assert len(cached) == 2 * 3 * (1 + 2)               # K x tests x (plain + 2 design sets)
+    assert len(cached) == 2 * 3 * (1 + 2 + 2)           # K x tests x (plain + 2 design + 2 refined sets)
+    assert "at 2 parameter sets each + 1 x 2 refined around the held-out posteriors" in text
     stamp = [p.stat().st_mtime_ns for p in cached]
     assert main(_argv(tiny, out)) == 0                   # again: every case reused
     assert [p.stat().st_mtime_ns for p in cached] == stamp
@@ -142,3 +145,19 @@ def test_a_one_parameter_design_runs_both_bounds():
     np.testing.assert_allclose(design(np.array([0.0]), np.array([0.2]), 5, 1)[:, 0], [0.0, 0.05, 0.1, 0.15, 0.2])
     np.testing.assert_array_equal(design(np.array([0.0, 1.0]), np.array([1.0, 2.0]), 4, 3),
                                   initial_design([0.0, 1.0], [1.0, 2.0], 4, 3))
+
+
+def test_a_refinement_round_spans_the_held_out_posteriors():
+    """One parameter: midpoints of equal cells over the fold means widened by 3/4 of the
+    spacing each side, clipped to the bounds (a bound is never run twice); more: a Latin
+    hypercube in that window."""
+    from ballaststudy.loop.cli import refined_design
+    one = refined_design([[0.3], [0.3]], np.array([0.0]), np.array([1.2]), np.array([0.15]), 4, 0)
+    np.testing.assert_allclose(one[:, 0], 0.1875 + 0.05625 * (np.arange(4) + 0.5), rtol=1e-12)
+    low = refined_design([[0.01], [0.05]], np.array([0.0]), np.array([1.2]), np.array([0.15]), 2, 0)
+    np.testing.assert_allclose(low[:, 0], [0.040625, 0.121875], rtol=1e-12)   # window [0, 0.1625]
+    two = refined_design([[0.2, 1.0], [0.4, 3.0]], np.array([0.0, 0.0]), np.array([1.0, 3.5]),
+                         np.array([0.1, 1.0]), 16, 7)
+    assert two.shape == (16, 2)
+    assert np.all(two >= [0.125, 0.25]) and np.all(two <= [0.475, 3.5])
+    assert np.ptp(two[:, 0]) > 0.25 and np.ptp(two[:, 1]) > 2.5        # it fills the window

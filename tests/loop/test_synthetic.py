@@ -79,3 +79,17 @@ def test_irreducible_rmse_is_the_chaos_of_the_truths_mean_plus_the_noise():
     np.testing.assert_allclose(per_test, expect, rtol=0.05)
     np.testing.assert_allclose(pooled, np.sqrt(np.mean(expect ** 2)), rtol=0.05)
     np.testing.assert_array_equal(irreducible_rmse(runs[0], runs, n, test, np.zeros(2))[0], 0.0)
+
+
+def test_no_planted_strength_is_a_grid_set():
+    """With the loop's own specimens (common random numbers) a grid set at the planted
+    value would be the truth itself, run again: the scenarios would test nothing."""
+    import inspect
+
+    from ballaststudy.loop.cli import _bounds, design
+    from ballaststudy.loop.synthetic import PLANTED, scenario_setup
+    sets = inspect.signature(scenario_setup).parameters["design_sets"].default     # the slow test's
+    for name, values in PLANTED.items():
+        if values:
+            grid = design(*_bounds(name), sets, 0)[:, 0]
+            assert np.min(np.abs(grid - next(iter(values.values())))) > 1e-3 * np.ptp(grid), name

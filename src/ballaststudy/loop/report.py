@@ -197,9 +197,12 @@ def report_markdown(lp, before, after, cov, cands, chosen, horizon, plain_mean, 
                     untestable=()):
     scale, unit = display_scale(lp["quantity"])
     q = lp["quantity"].replace("_", " ")
+    refined = (f" + {lp['refine_rounds']} x {lp['refine_sets']} refined around the held-out posteriors"
+               if lp["refine_rounds"] else "")
     lines = ["# Closing the loop with measured data", "",
              f"{len(before)} tests, {lp['cases']} specimens per model and test, {lp['cycles']} simulated cycles "
-             f"(the DEM horizon); {len(cands)} candidate effects at {lp['design_sets']} parameter sets each; "
+             f"(the DEM horizon); {len(cands)} candidate effects at {lp['design_sets']} parameter sets each"
+             f"{refined}; "
              f"{dem_cases} DEM cases ({minutes:.1f} min in this run; cases found in the cache are not rerun). "
              f"Quantity: {q} [{unit}].", "",
              "## DEM horizon: measured vs the plain model, per test", "",

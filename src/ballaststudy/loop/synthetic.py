@@ -142,7 +142,7 @@ def library_spec(library=None):
 
 
 def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, specimen_share=0.0,
-                   library=None, size_m=(0.12, 0.24)):
+                   library=None, size_m=(0.12, 0.24), refine_rounds=2, refine_sets=4):
     """A synthetic BPM library, a config for the loop at this scale and ``cases`` assembled
     biaxial specimens in ``folder``; returns (specimens, config, base parameters YAML). The
     defaults are the slow test's scale (tests/loop/test_undeclared.py says why)."""
@@ -156,7 +156,8 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
     cfg = yaml.safe_load(Path(config_file).read_text())
     cfg["databases_file"] = str(Path(config_file).parent / cfg["databases_file"])
     cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    cfg["loop"].update(cases=cases, cycles=cycles, design_sets=design_sets, measurement_sd=1e-5,
+    cfg["loop"].update(cases=cases, cycles=cycles, design_sets=design_sets, refine_rounds=refine_rounds,
+                       refine_sets=refine_sets, measurement_sd=1e-5,
                        posterior_samples=4096, specimen_share=float(specimen_share))
     (folder / "config.yaml").write_text(yaml.safe_dump(cfg))
     (folder / "base.yaml").write_text(yaml.safe_dump({"parameters": SCENARIO_BASE}))
