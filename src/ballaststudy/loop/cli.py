@@ -124,7 +124,7 @@ class Candidate:
 
 def _refine(runs, plain_at, probe_at, y, point_test, lp, seed):
     """_judge after ``refine_rounds`` rounds of refined_design sets added to every
-    candidate's runs (the grid's spacing halved each round)."""
+    candidate's runs (in place; the grid's spacing halved each round)."""
     from ..config import job_seed
     candidates, plain = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
     for r in range(lp["refine_rounds"]):
@@ -142,14 +142,14 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
     """({effect: Candidate}, the plain model's select.HeldOut): every candidate and the
     plain model under one noise model, made from the plain runs
     (select.residual_covariances)."""
-    from .select import fit_all, held_out_candidate, held_out_plain, residual_covariances
+    from .select import held_out_plain, judge_candidate, residual_covariances
     covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
                                             probe_at)
     plain = held_out_plain(plain_at, y, point_test, plain_covs)
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
-        out[name] = Candidate(thetas, at, held_out_candidate(*args), fit_all(*args), evaluate)
+        out[name] = Candidate(thetas, at, *judge_candidate(*args), evaluate)
     return out, plain
 
 

@@ -153,12 +153,7 @@ def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, 
     return samples, mean, per_test_loglik(mean, sd, np.asarray(y, float), point_test, covs)
 
 
-def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
-    """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P));
-    covs: residual_covariances' first (the noise every candidate is judged under)."""
-    y, point_test = np.asarray(y, float), np.asarray(point_test)
-    samples, mean, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper,
-                                     covs, n_samples, seed)
+def _held_out(samples, mean, loglik, y, point_test):
     tests = np.unique(point_test)
     lpd, predicted, theta_mean = np.empty(len(tests)), np.empty(len(y)), np.empty((len(tests), samples.shape[1]))
     for j, t in enumerate(tests):
@@ -172,15 +167,30 @@ def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n
     return HeldOut(lpd, predicted, theta_mean)
 
 
-def fit_all(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
-    """The candidate's parameter(s) from every test: posterior mean, 90 % interval (d, 2),
-    effective sample size, with the same likelihood as the held-out densities."""
-    samples, _, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper,
-                                  covs, n_samples, seed)
+def _fit(samples, loglik):
     log_w = loglik.sum(axis=1)
     w = np.exp(log_w - logsumexp(log_w))
     interval = np.array([weighted_quantile(s, w, [0.05, 0.95]) for s in samples.T])
     return w @ samples, interval, float(1.0 / np.sum(w ** 2))
+
+
+def judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
+    """(held_out_candidate, fit_all) of a candidate from one surrogate fit."""
+    y, point_test = np.asarray(y, float), np.asarray(point_test)
+    samples, mean, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed)
+    return _held_out(samples, mean, loglik, y, point_test), _fit(samples, loglik)
+
+
+def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
+    """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P));
+    covs: residual_covariances' first (the noise every candidate is judged under)."""
+    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed)[0]
+
+
+def fit_all(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
+    """The candidate's parameter(s) from every test: posterior mean, 90 % interval (d, 2),
+    effective sample size, with the same likelihood as the held-out densities."""
+    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed)[1]
 
 
 def held_out_plain(curves, y, point_test, covs):
