@@ -6,7 +6,7 @@ import time
 
 from snakemake.utils import min_version, validate
 
-from ballaststudy.config import ConfigError, check_domain, database_seed, validate as validate_file, form_params, load_databases, load_yaml, select_databases
+from ballaststudy.config import ConfigError, check_domain, database_seed, validate as validate_file, form_params, load_databases, load_yaml, select_databases, unknown_set_databases
 
 min_version("8.0")
 
@@ -17,9 +17,15 @@ def stop(err):
     sys.exit(2)
 
 
-CONFIG_FILE = (workflow.overwrite_configfiles or ["config/config.yaml"])[-1]
-try:  # a missing, binary or non-YAML config: our line before Snakemake's traceback
-    load_yaml(CONFIG_FILE)
+# A --configfile is read by Snakemake's command line before this file runs (ConfigSettings
+# -> load_configfile), so one it cannot open (a folder, a missing or binary file) is its
+# traceback, out of reach here. What it did read is read again here, for what it lets pass
+# (a key given twice: the last copy wins); the default config is read here first.
+CONFIG_FILES = workflow.overwrite_configfiles or ["config/config.yaml"]
+CONFIG_FILE = CONFIG_FILES[-1]
+try:  # missing, binary, not YAML, a key twice: our line before Snakemake's traceback
+    for path in CONFIG_FILES:
+        load_yaml(path)
 except ConfigError as err:
     stop(err)
 
@@ -32,6 +38,8 @@ try:
     check_domain(validate_file(config, "config", CONFIG_FILE), CONFIG_FILE)
     DATABASES = load_databases(config["databases_file"], form_params(config))
     NAMES = select_databases(config, DATABASES, CONFIG_FILE)
+    for note in unknown_set_databases(config, DATABASES):
+        print(note, file=sys.stderr)
 except ConfigError as err:
     stop(err)
 validate(config, "workflow/schemas/config.schema.yaml")
@@ -46,8 +54,10 @@ onerror:
 RESULTS = config["results_dir"]
 
 
+include: "workflow/rules/common.smk"
 include: "workflow/rules/forms.smk"
 include: "workflow/rules/bpm.smk"
+include: "workflow/rules/specimens.smk"
 include: "workflow/rules/measured.smk"
 include: "workflow/rules/calibration.smk"
 include: "workflow/rules/cases.smk"

@@ -1,5 +1,5 @@
 """Data with an undeclared effect (issue 14), measured: "measured" tests made by the model
-itself with one candidate effect at a strength the data do not state (loop/synthetic.py:
+itself with one candidate effect at a strength the data do not state (tests/loop/synthetic.py:
 11-35 digitised points uneven in ln N, 1 % noise), then `ballaststudy loop` on them. Prints,
 per scenario, the effect chosen and each candidate's evidence (gain, tests better, Wilcoxon
 p, held-out RMSE against the plain model's) and, per test, the planted effect's held-out RMSE
@@ -18,6 +18,7 @@ The slow test tests/loop/test_undeclared.py asserts the same scenarios at their 
         [--probes M]  # chaos probes of each truth for its irreducible RMSE (default 3)
 """
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -25,10 +26,12 @@ import numpy as np
 
 from ballaststudy.calibration.bayes import rmse
 from ballaststudy.loop.cli import PROBE_M_S
-from ballaststudy.loop.synthetic import (NOISE_SHARE, PLANTED, SCENARIO_BASE, SCENARIO_TESTS, irreducible_rmse,
-                                         run_scenario, scenario_setup, truth_runs)
 
 ROOT = Path(__file__).resolve().parents[1]
+# the planted scenarios are a test helper (tests/loop/synthetic.py), not part of the package
+sys.path.insert(0, str(ROOT / "tests" / "loop"))
+from synthetic import (NOISE_SHARE, PLANTED, SCENARIO_BASE, SCENARIO_TESTS, irreducible_rmse,  # noqa: E402
+                       run_scenario, scenario_setup, truth_runs)
 
 
 def per_test_rmse(loop_nc, effect):

@@ -9,17 +9,23 @@ import pandas as pd
 from tqdm import tqdm
 
 from .atomic import atomic_path
-from .config import ConfigError, database_seed, form_params, load_config, load_databases, select_databases
+from .config import (ConfigError, database_seed, form_params, load_config, load_databases,
+                     select_databases, unknown_set_databases)
 from .forms.evaluate import MeshError, evaluate_stl, units_warning
 from .forms.generator import GenerationError
 from .forms.objective import ObjectiveError
+from .forms.pipeline import generate_database
+from .forms.report import write_report
 from .forms.validate import SUMMARY_COLUMNS, validation_row
 from .inputs import input_dir, input_file, open_netcdf, writable_dir, writable_file
+from .provenance import Recorder
+from .provenance.store import lineage, load_records, verify, write_store
 from .bpm.cli import register as register_bpm
-from .calibration.cli import register as register_calibrate
+from .calibration.cli import check_targets, register as register_calibrate
 from .loop.cli import register as register_loop
 from .measured.cli import register as register_measured
-from .rig.cli import register as register_case
+from .measured.importer import load_conditions
+from .scenario.cli import register as register_case
 from .study.cli import register as register_study
 from .argtypes import SEED, integer
 
@@ -32,7 +38,6 @@ def _forms_generate(args):
     if args.all == bool(args.names):
         raise ConfigError("command line", "DATABASE", "name databases or give --all (not both)")
     names = select_databases(cfg if args.all else {"databases": args.names}, databases, args.config)
-    from .forms.pipeline import generate_database  # heavy imports only when generating
     bar = tqdm(names, desc="form databases", unit="db", disable=args.quiet)
     for name in bar:
         bar.set_postfix_str(name)
@@ -67,8 +72,6 @@ def _forms_evaluate(args):
 
 
 def _forms_report(args):
-    from .forms.report import write_report
-    from .provenance import Recorder
     writable_dir(args.out)
     databases = [open_netcdf(p, "forms") for p in args.files]
     recorder = Recorder("forms report", inputs=args.files, params={"stones": args.stones, "seed": args.seed})
@@ -82,7 +85,6 @@ def _forms_report(args):
 
 
 def _provenance_show(args):
-    from .provenance.store import lineage, load_records
     records = load_records(input_dir(args.results, "expected the results folder"))
     if str(Path(args.file)) not in records:     # an output with a record may be gone: still show it
         input_file(args.file, f"expected an output file or one recorded under {args.results}")
@@ -90,7 +92,6 @@ def _provenance_show(args):
 
 
 def _provenance_verify(args):
-    from .provenance.store import load_records, verify, write_store
     records = load_records(input_dir(args.results, "expected the results folder"))
     store = writable_file(Path(args.results) / "provenance" / "store.json")
     write_store(args.results, store)
@@ -104,11 +105,11 @@ def _provenance_verify(args):
 
 def _config_check(args):
     """What the workflow reads before any job: the config, its databases, the measured tests."""
-    from .measured.importer import load_conditions
     cfg = load_config(args.config)
     dbs = load_databases(cfg["databases_file"], form_params(cfg))
     names = select_databases(cfg, dbs, args.config)
-    from .calibration.cli import check_targets
+    for note in unknown_set_databases(cfg, dbs):
+        print(note, file=sys.stderr)
     tests_dir = Path(cfg["measured"]["tests_dir"])
     tests = sorted(tests_dir.rglob("*.yaml"))
     for test in tests:

@@ -3,10 +3,13 @@ ones the Snakefile validates with), plus domain checks. Every error names file, 
 allowed range in one line."""
 
 import copy
-import zlib
+from dataclasses import fields
 
 from .forms.objective import FormParams, ObjectiveError, build_objective
+from .rig.biaxial import BiaxialParams
+from .rig.params import RigParams
 from .schema import ConfigError, fill_defaults, load_schema, load_yaml, schema_path, validate  # noqa: F401 (re-exported)
+from .seeds import job_seed  # noqa: F401 (re-exported: the workflow's rules take it from here)
 
 
 
@@ -27,11 +30,12 @@ ORDERED_PAIRS = (
     ("rig.biaxial.loading", "deviator_min_kPa", "deviator_max_kPa", True),
     ("rig.biaxial.loading", "platen_v_min_m_s", "platen_v_max_m_s", False),
     ("bpm", "radius_min_mm", "radius_max_mm", False),
-    ("calibration.parameters.F_str_co", "min", "max", True),
-    ("calibration.parameters.mu", "min", "max", True),
-    ("calibration.parameters.E_star", "min", "max", True),
-    ("calibration.parameters.kappa_star", "min", "max", True),
 )
+
+# stages that run a specimen set, and the rig its set must be (None: the targets decide,
+# calibration.cli.targets_kind)
+SPECIMEN_STAGES = (("measured.sim", "biaxial"), ("calibration", None), ("loop", "biaxial"),
+                   ("parametric", "box"))
 
 
 def _section(cfg, dotted):
@@ -42,17 +46,9 @@ def _section(cfg, dotted):
 
 def _default(section, key):
     """The value a stage uses for a key the config leaves out (its params class' default)."""
-    from dataclasses import fields
-    if section == "bpm":
-        from .bpm.params import BpmParams
-        d = {f.name: f.default for f in fields(BpmParams)}
-        return d[key.removesuffix("_mm")] * 1e3 if key.endswith("_mm") else d.get(key)
-    if section.startswith("calibration"):
-        return None                 # required by the schema where they apply
-    if section.startswith("rig.biaxial"):
-        from .rig.biaxial import BiaxialParams as cls
-    else:
-        from .rig.params import RigParams as cls
+    if section == "bpm":        # the schema gives the bpm section's defaults (= BpmParams')
+        return load_schema("config")["properties"]["bpm"]["properties"][key].get("default")
+    cls = BiaxialParams if section.startswith("rig.biaxial") else RigParams
     return {f.name: f.default for f in fields(cls)}.get(key)
 
 
@@ -69,7 +65,41 @@ def check_domain(cfg, file):
     loads = _section(cfg, "rig.box.loading").get("static_loads_kN") or []
     if any(b <= a for a, b in zip(loads, loads[1:])):
         raise ConfigError(file, "rig.box.loading.static_loads_kN", f"{loads} must increase step by step")
+    check_specimen_sets(cfg, file)
     return cfg
+
+
+def check_specimen_sets(cfg, file):
+    """Each stage names a specimen set of the rig it runs and takes at most its cases; a
+    box set has the box rig's size. ConfigError naming the key otherwise."""
+    sets = cfg.get("specimens") or {}
+    for name, s in sets.items():
+        for key in ("width_m", "height_m"):
+            if s["rig"] == "box" and s.get(key) is not None:
+                raise ConfigError(file, f"specimens.{name}.{key}", f"{s[key]:g}: a box set has "
+                                  "rig.box.assembly's size; allowed: null (or leave it out)")
+    for section, kind in SPECIMEN_STAGES:
+        stage = _section(cfg, section)
+        name = stage.get("specimens")
+        if name is None:
+            continue
+        if name not in sets:
+            raise ConfigError(file, f"{section}.specimens", f"{name!r} is not a specimen set; "
+                              f"allowed: {', '.join(sets) or 'a set defined under specimens'}")
+        if kind and sets[name]["rig"] != kind:
+            raise ConfigError(file, f"{section}.specimens", f"{name!r} is a {sets[name]['rig']} "
+                              f"set; allowed: a {kind} set")
+        if stage.get("cases", 0) > sets[name]["cases"]:
+            raise ConfigError(file, f"{section}.cases", f"{stage['cases']}, but the set {name!r} "
+                              f"has {sets[name]['cases']}; allowed: at most {sets[name]['cases']}")
+
+
+def unknown_set_databases(cfg, databases):
+    """One line per specimen set whose database the databases file does not define: a note,
+    not an error - a study of other databases runs, only the stages using the set cannot."""
+    return [f"note: specimens.{name}.database {s['database']!r} is not in {cfg['databases_file']}: "
+            f"the stages that use the set cannot run" for name, s in (cfg.get("specimens") or {}).items()
+            if s["database"] not in databases]
 
 
 def form_params(cfg):
@@ -108,13 +138,6 @@ def select_databases(cfg, databases, file="config"):
         raise ConfigError(file, "databases", f"unknown database {unknown[0]!r}; allowed: "
                           + ", ".join(databases) + ", or 'all'")
     return list(wanted)
-
-
-def job_seed(study_seed, key):
-    """The one seed formula: a job's seed from the study seed and the job's key (e.g.
-    "G_1-1", "G_1-1/bpm", "G_1-1/case3") via CRC-32 (Python's hash() is salted per process
-    and so not reproducible)."""
-    return (int(study_seed) * 1_000_003 + zlib.crc32(key.encode())) % 2**63
 
 
 def database_seed(study_seed, name, definition):

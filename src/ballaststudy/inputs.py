@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .config import ConfigError
+from .schema import ConfigError
 
 _NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"\x89HDF\r\n\x1a\n")
 _ZIP_MAGIC = b"PK\x03\x04"

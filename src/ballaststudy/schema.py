@@ -197,20 +197,61 @@ def fill_defaults(data, schema):
             fill_defaults(data[key], sub)
 
 
-_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)   # libyaml when present: ~10x faster
+class DuplicateKeyError(yaml.constructor.ConstructorError):
+    """A mapping gives one key twice (dotted path, line numbers)."""
+
+    def __init__(self, key, first, second):
+        where = f"lines {first + 1} and {second + 1}" if first != second else f"line {first + 1}"
+        super().__init__(problem=f"key given twice ({where}); keep one")
+        self.key = key
+
+
+class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):   # libyaml when present: ~10x faster
+    """yaml.safe_load, except that a key given twice in one mapping is refused: PyYAML keeps
+    the last one silently, so an edit to the first copy would do nothing.
+
+    Checked on the node tree before construction: there the path to each mapping is known,
+    and a merge (`<<: *base`) has not yet been flattened into the mapping (a key that
+    overrides a merged one is not a duplicate)."""
+
+    def construct_document(self, node):
+        self._check_unique(node, [], set())
+        return super().construct_document(node)
+
+    def _check_unique(self, node, path, seen):
+        if id(node) in seen:                         # an alias: checked where it is anchored
+            return
+        seen.add(id(node))
+        if isinstance(node, yaml.SequenceNode):
+            for i, item in enumerate(node.value):
+                self._check_unique(item, path + [i], seen)
+        elif isinstance(node, yaml.MappingNode):
+            first = {}
+            for key_node, value_node in node.value:
+                sub = path
+                if isinstance(key_node, yaml.ScalarNode) and key_node.tag != "tag:yaml.org,2002:merge":
+                    key = self.construct_object(key_node)    # `1` and `0x1` are one key
+                    sub = path + [str(key)]
+                    earlier = first.setdefault(key, key_node)
+                    if earlier is not key_node:
+                        raise DuplicateKeyError(_key(sub), earlier.start_mark.line, key_node.start_mark.line)
+                self._check_unique(value_node, sub, seen)
 
 
 def load_yaml(path):
-    """A YAML file's data ({} if empty); ConfigError if missing, unreadable or not YAML text."""
+    """A YAML file's data ({} if empty); ConfigError if missing, unreadable, not YAML text or
+    a key is given twice in one mapping."""
     path = Path(path)
     if path.is_dir():
         raise ConfigError(path, None, "is a folder; expected a YAML file")
     if not path.is_file():
         raise ConfigError(path, None, "file not found")
     try:
-        data = yaml.load(path.read_bytes().decode("utf-8"), Loader=_LOADER)
+        data = yaml.load(path.read_bytes().decode("utf-8"), Loader=_UniqueKeyLoader)
     except UnicodeDecodeError:
         raise ConfigError(path, None, "not a text file; expected YAML (UTF-8)") from None
+    except DuplicateKeyError as err:
+        raise ConfigError(path, err.key, err.problem) from None
     except yaml.YAMLError as err:
         where = getattr(err, "problem_mark", None)
         line = f"line {where.line + 1}: " if where else ""

@@ -83,7 +83,7 @@ def box_target(tmp_path_factory, small_library):
 def test_calibration_runs_the_model_case_run_runs(box_target):
     """The Evaluator's case at the planted mu is `case run --conditions --parameters`'s,
     to the last bit; the test's peak load is what the cycles reach (the conditions act)."""
-    from ballaststudy.calibration.runner import Evaluator
+    from ballaststudy.calibration.evaluate import Evaluator
     d, config, conditions, measured, specimens, planted = box_target
     evaluate = Evaluator(["mu"], specimens, [(conditions, np.arange(1.0, CYCLES + 1))], config,
                          CYCLES, "settlement", d / "eval")

@@ -9,6 +9,7 @@ import pytest
 import yaml
 
 from ballaststudy.cli import main
+from ballaststudy.config import ConfigError
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -104,7 +105,7 @@ def test_study_follows_the_calibration_when_asked(tmp_path):
     out = subprocess.run(["snakemake", "--cores", "1", "-n", "-p", "study_aggregate"], cwd=tmp_path,
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
-    assert "rule calibrate:" in out.stdout and "rule calibration_assemble:" in out.stdout
+    assert "rule calibrate:" in out.stdout and "rule specimen_assemble:" in out.stdout
     target = cfg["calibration"]["targets"][0]
     assert f"--parameters results/calibration/{target}/calibrated.yaml" in out.stdout
 
@@ -144,17 +145,22 @@ def test_case_run_takes_calibrated_parameters(small_library, tmp_path, capsys):
         assert "\n" not in line and f"{path}: {key}" in line, line
 
 
-def test_parameter_ranges_are_the_schemas():
-    """One physical range per parameter: the config schema's prior bounds say the same."""
-    from ballaststudy.calibration.parameters import PARAMETERS
+def test_the_registry_decides_what_is_calibrated(tmp_path):
+    """One physical range per parameter, the material modifier's: every material modifier
+    is accepted within its range and refused just outside it (no list in the schema to
+    keep in step); the schema's default parameters are material modifiers."""
+    from ballaststudy.calibration.cli import check_parameters
+    from ballaststudy.scenario.modifiers import MATERIAL, material_parameter
     from ballaststudy.schema import load_schema
-    props = load_schema("config")["properties"]["calibration"]["properties"]["parameters"]["properties"]
-    assert set(props) == set(PARAMETERS)
-    for name, p in PARAMETERS.items():
-        for bound in ("min", "max"):
-            b = props[name]["properties"][bound]
-            low = b.get("exclusiveMinimum", b.get("minimum"))
-            assert (low, "exclusiveMinimum" in b, b["maximum"]) == (p.lowest, p.open_low, p.highest), name
+    default = load_schema("config")["properties"]["calibration"]["properties"]["parameters"]["default"]
+    assert set(default) <= set(MATERIAL) and len(MATERIAL) == 4
+    for name in MATERIAL:
+        p = material_parameter(name)
+        check_parameters({name: {"min": p.low + (1e-9 if p.open_low else 0.0), "max": p.high}}, "c.yaml")
+        for bad in ({"min": p.low - (0.0 if p.open_low else 1e-9), "max": p.high},
+                    {"min": p.low + 1e-3, "max": p.high * 1.001}):
+            with pytest.raises(ConfigError, match=f"calibration.parameters.{name}"):
+                check_parameters({name: bad}, "c.yaml")
 
 
 def _workflow_copy(tmp_path, change):
@@ -174,15 +180,22 @@ def _workflow_copy(tmp_path, change):
 
 
 def test_a_box_target_is_calibrated_on_box_specimens(tmp_path):
-    out = _workflow_copy(tmp_path, lambda c: c.update(targets=["planted/box"], quantity="settlement"))
+    """A box set is the study's assembled box cases: no biaxial specimen is assembled."""
+    out = _workflow_copy(tmp_path, lambda c: c.update(targets=["planted/box"], quantity="settlement",
+                                                       specimens="box", cases=2))
     assert out.returncode == 0, out.stderr
-    assert "--rig box" in out.stdout and "--rig biaxial" not in out.stdout
-    assert "results/calibration/specimens/box/box_test/case0.nc" in out.stdout
+    assert "rule case_assemble:" in out.stdout and "--rig biaxial" not in out.stdout
+    assert "results/cases/box_test/case0/assembled.nc" in out.stdout
     assert "--width-m" not in out.stdout          # the box keeps the rig's size
 
 
 @pytest.mark.parametrize("change, message", [
     (lambda c: c.update(targets=["planted/box"]), "calibration.quantity: axial_strain: the box rig"),
+    (lambda c: c.update(targets=["planted/box"], quantity="settlement"),
+     "calibration.specimens: 'biaxial_small' is a biaxial set, the targets need the box rig"),
+    (lambda c: c.update(specimens="box", cases=2), "calibration.specimens: 'box' is a box set, the targets need the biaxial rig"),
+    (lambda c: c.update(specimens="nothing"), "calibration.specimens: 'nothing' is not a specimen set"),
+    (lambda c: c.update(cases=4), "calibration.cases: 4, but the set 'biaxial_small' has 3"),
     (lambda c: c.update(targets=["planted/box", "sun_et_al_16/p60_q230_f5"], name="mixed"),
      "calibration.targets: planted/box, sun_et_al_16/p60_q230_f5 need the biaxial and box rigs"),
 ])

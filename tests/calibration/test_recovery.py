@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ballaststudy.calibration.bayes import calibrate, rmse
-from ballaststudy.calibration.runner import Evaluator
+from ballaststudy.calibration.evaluate import Evaluator
 from ballaststudy.rig.biaxial import BiaxialParams, assemble_biaxial
 from ballaststudy.rig.library import load_library
 

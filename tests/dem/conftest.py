@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation
-from ballaststudy.dem.generate import random_disks
+
+from .generate import random_disks
 
 HOOKE = dict(kn=1e6, kt=2e6 / 7, gamma_n=2000.0, gamma_t=1000.0, mu=0.5)
 

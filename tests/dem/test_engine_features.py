@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation
-from ballaststudy.dem.generate import random_disks
+
+from .generate import random_disks
 
 
 def test_energy_balance_with_damping_friction_dashpots_and_breakage():

@@ -87,7 +87,8 @@ def test_verlet_validity_test_misses_no_contact():
     on displacements relative to the common shift, per-ball wall clearance) must give the
     same motion as rebuilding before every step (only rounding may differ)."""
     from ballaststudy.dem import ContactMaterial, Simulation
-    from ballaststudy.dem.generate import random_disks
+
+    from .generate import random_disks
 
     def model():
         sim = Simulation(gravity=(0, -50.0), dt=1e-5, domain=(-0.1, -0.1, 0.3, 0.3), skin=0.001)

@@ -3,7 +3,8 @@ supports (moment balance), segmented bottom wall sums to the one-piece wall."""
 import numpy as np
 
 from ballaststudy.dem import ContactMaterial, Simulation
-from ballaststudy.dem.generate import random_disks
+
+from .generate import random_disks
 
 G = 9.81
 

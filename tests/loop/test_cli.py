@@ -120,7 +120,7 @@ def test_snakefile_plans_the_loop(tmp_path):
         pytest.skip("the shared measured data are not here (the loop's tests are imported from them)")
     out = _workflow(tmp_path, lambda c: None)
     assert out.returncode == 0, out.stderr
-    assert "rule loop_assemble:" in out.stdout and "ballaststudy loop results/measured/" in out.stdout
+    assert "rule specimen_assemble:" in out.stdout and "ballaststudy loop results/measured/" in out.stdout
 
 
 @pytest.mark.parametrize("change, message", [

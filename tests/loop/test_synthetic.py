@@ -1,13 +1,14 @@
-"""Model-made measured tests (loop/synthetic.py): digitised like the shared data - 11-35
+"""Model-made measured tests (synthetic.py): digitised like the shared data - 11-35
 points within the simulated cycles, spread uniformly in ln N, noise of the stated share of
 the final value - and declared like a real test: conditions and covariates, nothing that
 names the effect or its strength."""
 import numpy as np
 import yaml
 
-from ballaststudy.loop.synthetic import (POINTS, SCENARIO_LIBRARY, SCENARIO_TESTS, PlantedTest,
-                                        digitise, irreducible_rmse, library_spec)
 from ballaststudy.measured.importer import import_test, load_conditions
+
+from .synthetic import (POINTS, SCENARIO_LIBRARY, SCENARIO_TESTS, PlantedTest, digitise, irreducible_rmse,
+                        library_spec)
 
 
 def test_digitised_points_uneven_in_ln_n_with_the_stated_noise():
@@ -87,7 +88,8 @@ def test_no_planted_strength_is_a_grid_set():
     import inspect
 
     from ballaststudy.loop.cli import _bounds, design
-    from ballaststudy.loop.synthetic import PLANTED, scenario_setup
+
+    from .synthetic import PLANTED, scenario_setup
     sets = inspect.signature(scenario_setup).parameters["design_sets"].default     # the slow test's
     for name, values in PLANTED.items():
         if values:

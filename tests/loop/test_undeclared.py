@@ -1,5 +1,5 @@
 """Data with an undeclared effect (issue 14): model-made "measured" tests with one candidate
-effect at a strength the data do not state (loop/synthetic.py), digitised like the shared
+effect at a strength the data do not state (synthetic.py), digitised like the shared
 data. The goal: the loop names that effect and cuts the held-out RMSE by at least half; on
 the plain model plus noise (the negative control) it chooses nothing and leaves the model
 unchanged. Slow (45 min on 2 cores): the five scenarios share the candidates' grid sets
@@ -43,7 +43,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from ballaststudy.loop.synthetic import run_scenario, scenario_setup
+from .synthetic import run_scenario, scenario_setup
 
 ROOT = Path(__file__).resolve().parents[2]
 CASES, CYCLES, DESIGN_SETS = 3, 24, 9

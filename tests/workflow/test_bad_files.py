@@ -95,6 +95,14 @@ def _store_blocked(path, name, valid):
     return path
 
 
+def _key_twice(path, name, valid):
+    """The valid file with its first top-level `key: value` line again: the same value, so
+    only the repeat itself is wrong."""
+    text = valid[name].read_text()
+    path.write_text(text + re.search(r"^\w+: \S.*$", text, re.M)[0] + "\n")
+    return path
+
+
 def _under_file(path, name, valid):
     path.parent.joinpath("blocker").write_text("a regular file")
     return path.parent / "blocker" / path.name
@@ -112,7 +120,8 @@ _IN = {"missing": _missing, "directory": _folder, "empty": _write(b""), "garbage
 VARIANTS = {
     "nc": {**_IN, "wrong kind": _copy_of(WRONG_KIND.get), "YAML text": _write(b"seed: 1\nrig: {kind: box}\n"),
            "PNG": _write(PNG), "truncated": _truncated},
-    "yaml": {**_IN, "netCDF": _copy_of(lambda name: "forms"), "wrong kind": _copy_of(WRONG_KIND.get)},
+    "yaml": {**_IN, "netCDF": _copy_of(lambda name: "forms"), "wrong kind": _copy_of(WRONG_KIND.get),
+             "key given twice": _key_twice},
     "npz": {"directory": _folder, "empty": _write(b""), "garbage bytes": _write(GARBAGE),
             "netCDF": _copy_of(lambda name: "forms"), "wrong kind": _copy_of(lambda name: "other_npz"),
             "truncated": _truncated, "unusable contents": _copy_of(lambda name: "checkpoint")},

@@ -157,6 +157,40 @@ def test_unreadable_config_file_is_one_line(study, content):
     assert out.stderr.startswith("ballaststudy: error: config/config.yaml: not ")
 
 
+@pytest.fixture
+def bare_workflow(tmp_path):
+    """The Snakefile, its rules and the shipped config, nothing built: for dry runs that
+    must stop before any job."""
+    shutil.copy(ROOT / "Snakefile", tmp_path)
+    for folder in ("workflow", "config"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    return tmp_path
+
+
+# (file, the start of its first line of the key, a second copy, dotted path, how given)
+TWICE = [("config/config.yaml", "seed: ", "seed: 1", "seed", []),
+         ("config/databases.yaml", "  mass_kg: ", "  mass_kg: 5", "defaults.mass_kg", []),
+         ("config/config.yaml", "      cycles: ", "      cycles: 4", "rig.box.loading.cycles",
+          ["--configfile", "config/config.yaml"])]
+
+
+@pytest.mark.parametrize("file, start, copy, key, args", TWICE, ids=["seed", "databases-nested", "configfile-nested"])
+def test_a_key_given_twice_is_one_line(bare_workflow, file, start, copy, key, args):
+    """PyYAML keeps the last copy of a key silently; the workflow refuses the file before
+    any job, whether the Snakefile reads it first or Snakemake (--configfile) did."""
+    path = bare_workflow / file
+    lines = path.read_text().splitlines(keepends=True)
+    at = next(i for i, line in enumerate(lines) if line.startswith(start))
+    lines.insert(at + 1, copy + "\n")
+    path.write_text("".join(lines))
+    out = subprocess.run(["snakemake", "--cores", "1", "-n", *args], cwd=bare_workflow,
+                         capture_output=True, text=True)
+    shown = path if args else file                  # Snakemake passes --configfile on absolute
+    assert out.returncode == 2, out.stdout + out.stderr
+    assert out.stderr.strip().splitlines() == [
+        f"ballaststudy: error: {shown}: {key}: key given twice (lines {at + 1} and {at + 2}); keep one"], out.stderr
+
+
 def test_a_failing_job_shows_our_line(study):
     """Bad input met inside a job (a damaged forms file): Snakemake prints the job's log
     (the Snakefile's onerror), so the one line reaches the terminal, with no traceback."""

@@ -1,6 +1,4 @@
 # Stage 2: bonded particle models of the 2D forms (thesis 4.2.1), one library per database.
-import json
-
 
 rule bpm_build:
     input:
@@ -9,7 +7,7 @@ rule bpm_build:
         f"{RESULTS}/bpm/{{db}}.nc",
     params:
         # the bpm settings and the study seed: editing them reruns every library
-        bpm=json.dumps(config.get("bpm") or {}, sort_keys=True),
+        bpm=trigger("bpm"),
         seed=config["seed"],
         config=CONFIG_FILE,
     log:

@@ -12,34 +12,13 @@ try:                                      # before any job: one line, file and k
     CAL_KIND = targets_kind(config, CONFIG_FILE, MEASURED_TESTS_DIR) if MEASURED_TESTS else "biaxial"
 except ConfigError as err:
     stop(err)
-CAL_RIG = config["rig"].get(CAL_KIND) or {}
-# the biaxial specimen's size from the calibration section (a small specimen); the box's is the rig's
-CAL_SIZE = " ".join(f"--{k.replace('_', '-')} {CALIBRATION[k]}" for k in ("width_m", "height_m")
-                    if CAL_KIND == "biaxial" and CALIBRATION.get(k) is not None)
-
-
-rule calibration_assemble:
-    input:
-        bpm=f"{RESULTS}/bpm/{CALIBRATION['database']}.nc",
-    output:
-        f"{RESULTS}/calibration/specimens/{CAL_KIND}/{CALIBRATION['database']}/case{{case}}.nc",
-    params:
-        assembly=json.dumps(CAL_RIG.get("assembly") or {}, sort_keys=True),
-        size=CAL_SIZE,
-        config=CONFIG_FILE,
-    log:
-        f"{RESULTS}/logs/calibration/specimen{{case}}.log",
-    shell:
-        f"ballaststudy case assemble {{input.bpm}} --case {{wildcards.case}} --rig {CAL_KIND} "
-        "{params.size} --config {params.config} --out {output} --quiet > {log} 2>&1"
 
 
 rule calibrate:
     input:
         measured=[f"{RESULTS}/measured/{t}.nc" for t in CAL_TARGETS],
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in CAL_TARGETS],
-        specimens=expand(f"{RESULTS}/calibration/specimens/{CAL_KIND}/{CALIBRATION['database']}/case{{case}}.nc",
-                         case=range(CALIBRATION["cases"])),
+        specimens=specimen_files("calibration"),
     output:
         yaml=f"{CAL_OUT}/calibrated.yaml",
         nc=f"{CAL_OUT}/evaluations.nc",
@@ -48,8 +27,9 @@ rule calibrate:
         figures=report([f"{CAL_OUT}/curves.png", f"{CAL_OUT}/corner.png"],
                        caption="../report/calibration.rst", category="Calibration"),
     params:
-        calibration=json.dumps(CALIBRATION, sort_keys=True),
-        rig=json.dumps(CAL_RIG.get("loading") or {}, sort_keys=True),
+        calibration=trigger("calibration"),
+        rig=trigger(f"rig.{CAL_KIND}.loading", drop=conditioned_keys(CAL_KIND, CAL_TARGETS)),
+        metrics=trigger("metrics"),
         out_dir=CAL_OUT,
         config=CONFIG_FILE,
     threads: 256      # Snakemake caps it at --cores (workflow.cores breaks snakemake --report)

@@ -4,16 +4,9 @@
 # edited); cases per database: study.cases_per_database (default 10, as in the thesis);
 # material parameters: study.parameters (table_4_2, or calibrated: the calibrate target's
 # calibrated.yaml, so the study follows the calibration).
-import json
-
 from ballaststudy.rig.params import RigParams
 
 CASES = list(range(int(config.get("study", {}).get("cases_per_database", 10))))
-
-
-def box_stage(stage):
-    """JSON of the config's rig.box.<stage> section (the rerun trigger of that stage)."""
-    return json.dumps((config.get("rig", {}).get("box") or {}).get(stage) or {}, sort_keys=True)
 
 
 rule case_assemble:
@@ -22,7 +15,7 @@ rule case_assemble:
     output:
         f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
     params:
-        assembly=box_stage("assembly"),   # editing the assembly section: reassemble
+        assembly=trigger("rig.box.assembly"),   # editing the assembly section: reassemble
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/cases/{{db}}/case{{case}}_assemble.log",
@@ -43,8 +36,8 @@ rule case_run:
         case_png=f"{RESULTS}/cases/{{db}}/case{{case}}/case.png",
         curves=f"{RESULTS}/cases/{{db}}/case{{case}}/behaviours.png",
     params:
-        loading=box_stage("loading"),   # editing the loading or metrics section: rerun the loading
-        metrics=json.dumps(config.get("metrics", {}), sort_keys=True),
+        loading=trigger("rig.box.loading"),   # editing the loading or metrics section: rerun the loading
+        metrics=trigger("metrics"),
         cycles=RigParams.from_config(config.get("rig")).cycles,
         parameters=f"--parameters {CAL_OUT}/calibrated.yaml" if CALIBRATED else "",
         config=CONFIG_FILE,

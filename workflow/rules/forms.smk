@@ -1,6 +1,4 @@
 # Stage 1: the ballast random form generator (thesis ch. 3), one job per database.
-import json
-
 
 rule forms_generate:
     output:
@@ -8,8 +6,8 @@ rule forms_generate:
         stl=f"{RESULTS}/forms/{{db}}.stl.zip",
     params:
         # the database's own definition and the form settings: editing them reruns this job
-        definition=lambda w: json.dumps(DATABASES[w.db], sort_keys=True),
-        forms=json.dumps(config["forms"], sort_keys=True),
+        definition=lambda w: json.dumps(DATABASES[w.db], sort_keys=True),  # a database, not a section
+        forms=trigger("forms"),
         seed=lambda w: database_seed(config["seed"], w.db, DATABASES[w.db]),
         config=CONFIG_FILE,
     log:

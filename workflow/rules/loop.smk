@@ -12,29 +12,11 @@ except ConfigError as err:
 LOOP_CALIBRATED = LOOP["parameters"] == "calibrated"
 
 
-rule loop_assemble:
-    input:
-        bpm=f"{RESULTS}/bpm/{LOOP['database']}.nc",
-    output:
-        f"{RESULTS}/loop/specimens/{LOOP['database']}/case{{case}}.nc",
-    params:
-        assembly=json.dumps((config["rig"].get("biaxial") or {}).get("assembly") or {}, sort_keys=True),
-        size=" ".join(f"--{k.replace('_', '-')} {LOOP[k]}" for k in ("width_m", "height_m")
-                      if LOOP.get(k) is not None),
-        config=CONFIG_FILE,
-    log:
-        f"{RESULTS}/logs/loop/specimen{{case}}.log",
-    shell:
-        "ballaststudy case assemble {input.bpm} --case {wildcards.case} --rig biaxial "
-        "{params.size} --config {params.config} --out {output} --quiet > {log} 2>&1"
-
-
 rule loop:
     input:
         measured=[f"{RESULTS}/measured/{t}.nc" for t in LOOP["targets"]],
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in LOOP["targets"]],
-        specimens=expand(f"{RESULTS}/loop/specimens/{LOOP['database']}/case{{case}}.nc",
-                         case=range(LOOP["cases"])),
+        specimens=specimen_files("loop"),
         parameters=[f"{CAL_OUT}/calibrated.yaml"] if LOOP_CALIBRATED else [],
     output:
         md=report(f"{RESULTS}/loop/report.md", caption="../report/loop.rst", category="Loop"),
@@ -42,8 +24,9 @@ rule loop:
         chosen=f"{RESULTS}/loop/chosen.yaml",
         png=report(f"{RESULTS}/loop/curves.png", caption="../report/loop.rst", category="Loop"),
     params:
-        loop=json.dumps(LOOP, sort_keys=True),
-        rig=json.dumps((config["rig"].get("biaxial") or {}).get("loading") or {}, sort_keys=True),
+        loop=trigger("loop"),
+        rig=trigger("rig.biaxial.loading", drop=conditioned_keys("biaxial", LOOP["targets"])),
+        metrics=trigger("metrics"),
         parameters=f"--parameters {CAL_OUT}/calibrated.yaml" if LOOP_CALIBRATED else "",
         config=CONFIG_FILE,
     threads: 256      # Snakemake caps it at --cores

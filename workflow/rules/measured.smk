@@ -1,7 +1,6 @@
 # Measured cyclic tests in: every conditions YAML under measured.tests_dir (one test each,
 # its curve files beside it or in measured.data_dir) -> results/measured/<test>.nc.
 # A user adds a test by dropping its YAML (+ curve files) into the folder.
-import json
 from pathlib import Path
 
 from ballaststudy.measured.importer import curve_files, load_conditions
@@ -46,37 +45,23 @@ rule measured_all:
         expand(f"{RESULTS}/measured/{{test}}.nc", test=MEASURED_TESTS),
 
 
-# Every measured test simulated: `cases` biaxial specimens (shared by all tests: the
-# conditions only act on the loading), each run under the test's p, q and f.
+# Every measured test simulated: the first `cases` specimens of the set measured.sim.specimens
+# (shared by all tests: the conditions only act on the loading), each run under the test's
+# p, q and f.
 MEASURED_SIM = config["measured"]["sim"]
+SIM_SPECIMENS = specimen_files("measured.sim")
 SIM_CASES = list(range(MEASURED_SIM["cases"]))
-
-
-rule measured_sim_assemble:
-    input:
-        bpm=f"{RESULTS}/bpm/{MEASURED_SIM['database']}.nc",
-    output:
-        f"{RESULTS}/measured_sim/specimens/case{{case}}.nc",
-    params:
-        assembly=json.dumps((config["rig"].get("biaxial") or {}).get("assembly") or {}, sort_keys=True),
-        size=" ".join(f"--{k.replace('_', '-')} {MEASURED_SIM[k]}" for k in ("width_m", "height_m")
-                      if MEASURED_SIM.get(k) is not None),
-        config=CONFIG_FILE,
-    log:
-        f"{RESULTS}/logs/measured_sim/specimen{{case}}.log",
-    shell:
-        "ballaststudy case assemble {input.bpm} --case {wildcards.case} --rig biaxial "
-        "{params.size} --config {params.config} --out {output} --quiet > {log} 2>&1"
 
 
 rule measured_sim_run:
     input:
-        specimen=f"{RESULTS}/measured_sim/specimens/case{{case}}.nc",
+        specimen=lambda wc: SIM_SPECIMENS[int(wc.case)],
         conditions=lambda wc: MEASURED_TESTS_DIR / f"{wc.test}.yaml",
     output:
         f"{RESULTS}/measured_sim/cases/{{test}}/case{{case}}.nc",
     params:
-        loading=json.dumps((config["rig"].get("biaxial") or {}).get("loading") or {}, sort_keys=True),
+        loading=lambda wc: trigger("rig.biaxial.loading", drop=conditioned_keys("biaxial", [wc.test])),
+        metrics=trigger("metrics"),
         cycles=MEASURED_SIM["cycles"],
         mode=MEASURED_SIM["mode"],
         config=CONFIG_FILE,

@@ -7,7 +7,7 @@ from ballaststudy.calibration.parametric import design_sets
 from ballaststudy.config import job_seed
 
 PARAMETRIC = config["parametric"]
-PARAM_DB = PARAMETRIC["database"]
+PARAM_SPECIMENS = specimen_files("parametric")
 PARAM_CYCLES = RigParams.from_config(config.get("rig")).cycles
 # setting name -> {parameter: value}: one at a time, then the design (seeded by the config)
 PARAM_SETTINGS = {f"{name}_{v:g}": {name: v} for name in ("F_str_co", "mu") for v in PARAMETRIC[name]}
@@ -33,12 +33,13 @@ rule parametric_setting:
 
 rule parametric_run:
     input:
-        assembled=f"{RESULTS}/cases/{PARAM_DB}/case{{case}}/assembled.nc",
+        assembled=lambda wc: PARAM_SPECIMENS[int(wc.case)],
         parameters=f"{RESULTS}/parametric/settings/{{setting}}.yaml",
     output:
         f"{RESULTS}/parametric/{{setting}}/case{{case}}/metrics.nc",
     params:
-        loading=box_stage("loading"),
+        loading=trigger("rig.box.loading"),
+        metrics=trigger("metrics"),
         cycles=PARAM_CYCLES,
         config=CONFIG_FILE,
     log:

@@ -8,6 +8,8 @@ from tqdm import tqdm
 from ..config import ConfigError, job_seed, load_config
 from ..inputs import writable_file
 from ..argtypes import SEED, integer
+from .library import build_library, open_forms
+from .params import BpmParams
 
 
 def bpm_seed(study_seed, database):
@@ -17,8 +19,6 @@ def bpm_seed(study_seed, database):
 
 
 def _bpm_build(args):
-    from .library import build_library, open_forms   # numba engine only when building
-    from .params import BpmParams
     writable_file(args.out)
     cfg = load_config(args.config)
     try:

@@ -7,7 +7,7 @@ import numpy as np
 import xarray as xr
 
 from ..atomic import atomic_path
-from ..config import ConfigError
+from ..schema import ConfigError
 from ..forms.database import stone_profiles
 from ..inputs import open_netcdf
 from ..provenance import Recorder

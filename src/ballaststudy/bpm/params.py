@@ -4,9 +4,8 @@ import json
 from dataclasses import asdict, dataclass, replace
 
 from ..dem import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial
-from ..dem.materials import F_STR_CO
+from ..dem.materials import F_STR_CO, MATERIAL_NAMES
 
-MATERIAL_NAMES = ("hard", "soft")     # = the forms file's material flag_meanings
 
 
 @dataclass(frozen=True)

@@ -9,18 +9,31 @@ measured box curve is compared as given, so give it relative to its first cycle 
         results/calibration/<name> [--jobs 2]
 
 Every check (bounds, the measured points within the simulated cycles, K = the specimens)
-before any case runs; finished cases are reused (runner.py), so an interrupted calibration
+before any case runs; finished cases are reused (scenario.runner), so an interrupted calibration
 resumes. Writes evaluations.nc, posterior.nc, calibrated.yaml, curves.png, corner.png and
 summary.md into the folder."""
+import json
 import time
 from argparse import ArgumentTypeError
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 from ..argtypes import integer, number
+from ..atomic import atomic_path
 from ..config import ConfigError, load_config
 from ..inputs import input_file, open_netcdf, writable_dir, writable_file
+from ..measured.importer import load_conditions
+from ..provenance import Recorder
+from ..rig.kinds import RUNS_TESTS, kind_for_test, kind_of, rig_classes
+from ..scenario.modifiers import MATERIAL, MODIFIERS, material_parameter
+from .bayes import calibrate, rmse
+from .evaluate import Evaluator
+from .parametric import (DESIGN, cases_per_value, findings, parametric_dataset, plot_parameter,
+                         report_markdown, sensitivity_table, slope_table)
+from .report import (calibrated_yaml, evaluations_dataset, plot_corner, plot_curves,
+                     posterior_dataset, summary_markdown)
 
 METHOD = ("Gaussian-process surrogate of the ensemble-mean curve (scikit-learn, BSD-3), "
           "uniform prior in the bounds, Gaussian likelihood with the ensemble's pooled "
@@ -33,7 +46,6 @@ RIG_QUANTITIES = {"biaxial": ("axial_strain", "volumetric_strain"), "box": ("set
 
 def specimens_kind(paths):
     """The rig kind of the K assembled specimens; ConfigError if they differ."""
-    from ..rig.kinds import kind_of
     kinds = [kind_of(open_netcdf(p, "assembled")) for p in paths]
     if len(set(kinds)) > 1:
         raise ConfigError(paths[kinds.index(kinds[-1])], "rig_kind", f"{kinds[-1]}, but "
@@ -42,7 +54,6 @@ def specimens_kind(paths):
 
 
 def write_netcdf(ds, path):
-    from ..atomic import atomic_path
     with atomic_path(path) as tmp:        # creates the folder; a partial file never stays
         ds.to_netcdf(tmp)
 
@@ -56,17 +67,33 @@ def check_targets(cfg, config_file, tests):
         if tests and target not in tests:
             raise ConfigError(config_file, f"calibration.targets[{k}]", f"{target!r} is not a measured "
                               f"test under {cfg['measured']['tests_dir']}; allowed: {', '.join(tests)}")
+    check_parameters(cal["parameters"], config_file)
     if len(cal["targets"]) > 1 and not cal.get("name"):
         raise ConfigError(config_file, "calibration.name", "missing; allowed: a folder name, required "
                           "with more than one target")
     return cal.get("name") or cal["targets"][0]
 
 
+def check_parameters(parameters, config_file):
+    """Each calibrated parameter a material modifier's, its prior bounds inside the
+    modifier's physical range and min below max; ConfigError naming the key."""
+    for name, bounds in parameters.items():
+        key = f"calibration.parameters.{name}"
+        if name not in MATERIAL:
+            raise ConfigError(config_file, key, f"unknown key; allowed: {', '.join(MATERIAL)}")
+        p = material_parameter(name)
+        for end in ("min", "max"):
+            if not p.admits(bounds[end]):
+                raise ConfigError(config_file, f"{key}.{end}", f"{bounds[end]!r} is not allowed; "
+                                  f"allowed: a number {p.range_text()}")
+        if not bounds["min"] < bounds["max"]:
+            raise ConfigError(config_file, f"{key}.min", f"{bounds['min']:g} must be below {key}.max "
+                              f"({bounds['max']:g})")
+
+
 def targets_kind(cfg, config_file, tests_dir):
     """The rig kind that runs the calibration's targets (their conditions' ``rig``), checked
     to be one kind that records calibration.quantity."""
-    from ..measured.importer import load_conditions
-    from ..rig.kinds import kind_for_test
     cal = cfg["calibration"]
     kinds = [kind_for_test(load_conditions(Path(tests_dir) / f"{t}.yaml")["rig"]) for t in cal["targets"]]
     if len(set(kinds)) > 1:
@@ -75,13 +102,17 @@ def targets_kind(cfg, config_file, tests_dir):
     if cal["quantity"] not in RIG_QUANTITIES[kinds[0]]:
         raise ConfigError(config_file, "calibration.quantity", f"{cal['quantity']}: the {kinds[0]} "
                           f"rig (the targets') does not record it; allowed: {', '.join(RIG_QUANTITIES[kinds[0]])}")
+    sets = cfg.get("specimens") or {}
+    if cal["specimens"] in sets and sets[cal["specimens"]]["rig"] != kinds[0]:
+        raise ConfigError(config_file, "calibration.specimens", f"{cal['specimens']!r} is a "
+                          f"{sets[cal['specimens']]['rig']} set, the targets need the {kinds[0]} rig; "
+                          f"allowed: a {kinds[0]} set")
     return kinds[0]
 
 
 def check_rig(path, config, cal, kind, section="calibration"):
     """ConfigError unless specimens of rig ``kind`` run the measured test and record
     calibration.quantity."""
-    from ..rig.kinds import RUNS_TESTS
     rig = open_netcdf(path, "measured").attrs.get("rig")
     if rig not in RUNS_TESTS[kind]:
         raise ConfigError(path, "rig", f"{rig}: the specimens are {kind} specimens; "
@@ -130,13 +161,6 @@ def checked_targets(args, section_cfg, section):
 
 
 def _calibrate(args):
-    from ..provenance import Recorder
-    from ..rig.kinds import rig_classes
-    from .bayes import calibrate, rmse
-    from .parameters import PARAMETERS
-    from .report import (calibrated_yaml, evaluations_dataset, plot_corner, plot_curves,
-                         posterior_dataset, summary_markdown)
-    from .runner import Evaluator
     out = writable_dir(args.out_dir)
     cfg = load_config(args.config)
     cal = cfg["calibration"]
@@ -148,7 +172,7 @@ def _calibrate(args):
     lower = np.array([cal["parameters"][k]["min"] for k in names], float)
     upper = np.array([cal["parameters"][k]["max"] for k in names], float)
     rig = rig_classes(kind)[0].from_dataset(open_netcdf(args.specimens[0], "assembled"), "engine_checkpoint")
-    table = {k: PARAMETERS[k].table_4_2(rig) for k in names}
+    table = {k: MODIFIERS[k].current(rig)[k] for k in names}
     t_before = np.array([table[k] for k in names])
     inside = bool(np.all((t_before >= lower) & (t_before <= upper)))
     recorder = Recorder("calibrate", inputs=(*args.measured, *args.conditions, args.config, *args.specimens),
@@ -195,9 +219,8 @@ def _calibrate(args):
     summary_markdown(files["summary.md"], ", ".join(Path(m).stem for m in args.measured), names,
                      res.posterior, summary)
     recorder.finish()
-    cases = [out / "cases" / st["key"] / f"test{j}" / f"case{k}.nc"   # this run's sets (the
-             for st in evaluate.sets for j in range(len(targets))     # folder may cache older ones)
-             for k in range(cal["cases"])]
+    cases = [f for st in evaluate.sets for per_test in st["cases"] for f in per_test]  # this run's
+    # sets (the cache folder may hold older ones)
     recorder.write_beside(files["calibrated.yaml"],
                           also=[f for k, f in files.items() if k != "calibrated.yaml"] + cases)
     if not args.quiet:
@@ -207,17 +230,13 @@ def _calibrate(args):
 
 def _setting(args):
     """A calibrated.yaml of the parametric study's runs: NAME VALUE [NAME VALUE ...]."""
-    import yaml
-
-    from ..atomic import atomic_path
-    from .parameters import PARAMETERS
     out = writable_file(args.out)
     if len(args.pairs) % 2:
         raise ConfigError(args.out, "parameters", f"{' '.join(args.pairs)}: allowed: NAME VALUE pairs")
     values = {}
     for name, text in zip(args.pairs[::2], args.pairs[1::2]):
-        if name not in PARAMETERS:
-            raise ConfigError(args.out, "parameters", f"{name}: unknown; allowed: {', '.join(PARAMETERS)}")
+        if name not in MATERIAL:
+            raise ConfigError(args.out, "parameters", f"{name}: unknown; allowed: {', '.join(MATERIAL)}")
         try:
             values[name] = number(1e-9, 1000)(text)
         except ArgumentTypeError as err:
@@ -227,11 +246,6 @@ def _setting(args):
 
 
 def _parametric_report(args):
-    from ..provenance import Recorder
-    import json
-
-    from .parametric import (DESIGN, cases_per_value, findings, parametric_dataset, plot_parameter,
-                             report_markdown, sensitivity_table, slope_table)
     out = writable_dir(args.out_dir)
     recorder = Recorder("parametric report", inputs=[input_file(p, "expected a netCDF file") for p in args.cases])
     ds = parametric_dataset(args.cases)

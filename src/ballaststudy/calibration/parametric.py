@@ -19,12 +19,14 @@ import xarray as xr
 from scipy import stats
 
 from ..atomic import atomic_path
-from ..config import ConfigError
 from ..inputs import open_netcdf
 from ..metrics.output import VARIABLES, display_scale
+from ..scenario.modifiers import material_parameter
+from ..schema import ConfigError
 from ..study import scale
 from ..study.optimise import UNDECIDED_AT_SCALE, three_way
-from .parameters import PARAMETERS
+from .bayes import initial_design
+from .sensitivity import sobol_indices
 
 OUTPUTS = ("settlement", "breakage_rate")
 NAMES = ("F_str_co", "mu")        # the parameters the study varies
@@ -36,7 +38,6 @@ FINDINGS = {"F_str_co": "settlement rises as F_str-co falls (thesis 4.4, Fig. 4-
 def design_sets(ranges, n, seed):
     """[{name: value}] of the sensitivity design: n sets, a Latin hypercube in ``ranges``
     ({name: (low, high)}, the one-at-a-time values' span)."""
-    from .bayes import initial_design
     if n == 0:
         return []
     lower, upper = (np.array([ranges[k][i] for k in NAMES], float) for i in (0, 1))
@@ -73,7 +74,7 @@ def parametric_dataset(paths):
                      {"units": "1", "long_name": "its value (the other at Table 4.2's; NaN in the design)"})
     for k in NAMES:
         data[k] = ("run", [r[1].get(k, np.nan) for r in rows],
-                   {"units": PARAMETERS[k].units, "long_name": f"{k} of the run (NaN: Table 4.2's)"})
+                   {"units": material_parameter(k).units, "long_name": f"{k} of the run (NaN: Table 4.2's)"})
     data["specimen"] = ("run", [r[2] for r in rows], {"units": "1", "long_name": "seed of the assembled case (the same K for every value)"})
     return xr.Dataset(data, coords={"cycle": ("cycle", np.arange(n), {"units": "1", "long_name": "load cycle"})},
                       attrs={"Conventions": "CF-1.8", "title": "parametric study (thesis 4.4)",
@@ -83,7 +84,6 @@ def parametric_dataset(paths):
 def sensitivity_table(ds, seed=0):
     """Per output: Sobol indices over the design runs (each set's mean of its cases); []
     without design runs, or with fewer than 4 sets."""
-    from .sensitivity import sobol_indices
     sel = ds["parameter"].values == DESIGN
     thetas = np.column_stack([ds[k].values[sel] for k in NAMES])
     sets, which = np.unique(thetas, axis=0, return_inverse=True) if sel.any() else (np.zeros((0, 2)), None)
@@ -164,7 +164,7 @@ def plot_parameter(path, ds, name):
         ax.set_ylabel(f"{k.replace('_', ' ')} [{unit}]")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    fig.suptitle(f"{PARAMETERS[name].long_name}: mean of the cases and +-1 sd", fontsize=8)
+    fig.suptitle(f"{material_parameter(name).long_name}: mean of the cases and +-1 sd", fontsize=8)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", bbox_inches="tight")
     plt.close(fig)

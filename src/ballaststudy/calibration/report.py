@@ -8,14 +8,14 @@ import yaml
 
 from ..atomic import atomic_path
 from ..metrics.output import VARIABLES, display_scale
-from .parameters import PARAMETERS
+from ..scenario.modifiers import material_parameter
 
 CF = "CF-1.8"
 CONSTRAINED = 0.5       # a 90 % interval wider than this share of the prior: not constrained
 
 
 def evaluations_dataset(names, sets, rounds, points, point_test, measured, cycles, quantity, attrs):
-    """sets: the Evaluator's (values, key, curves (T, K, cycles), at_points (K, P), failed
+    """sets: the Evaluator's (values, keys (T,), curves (T, K, cycles), at_points (K, P), failed
     (T, K)); rounds: per
     set (0 the initial design, 1.. the sequential rounds, -1 the calibrated set); the points
     are the target tests' measured points one after the other (point_test: which test)."""
@@ -27,7 +27,7 @@ def evaluations_dataset(names, sets, rounds, points, point_test, measured, cycle
     return xr.Dataset({
         "parameter_value": (("set", "parameter"), values, {"units": "1", "long_name": "parameter values of the set"}),
         "round": ("set", np.asarray(rounds, np.int32), {"units": "1", "long_name": "design round (0 initial design, -1 the calibrated set)"}),
-        "set_key": ("set", [s["key"] for s in sets], {"long_name": "folder of the set's cases under cases/"}),
+        "scenario_key": (("set", "test"), [s["keys"] for s in sets], {"long_name": "cache key of the set's scenario under the test: its cases are cases/<key>/case<k>.nc"}),
         "failed": (("set", "test", "case"), np.array([s["failed"] for s in sets], np.int8), {"units": "1", "long_name": "the case's specimen failed (its curve censored at the failure strain)"}),
         quantity: (("set", "test", "case", "cycle"), curves, {"units": units, "long_name": "simulated " + long_name}),
         quantity + "_at_points": (("set", "case", "point"), at, {"units": units, "long_name": f"simulated {long_name} at the measured cycles (interpolated in ln N)"}),
@@ -130,7 +130,7 @@ def plot_corner(path, names, post, evaluated, lower, upper, seed=0):
 
 
 def summary_markdown(path, target, names, post, s):
-    rows = "\n".join(f"| {k} | {PARAMETERS[k].long_name} | {s['table_4_2'][k]:.4g} | {m:.4g} | "
+    rows = "\n".join(f"| {k} | {material_parameter(k).long_name} | {s['table_4_2'][k]:.4g} | {m:.4g} | "
                      f"{a:.4g} - {b:.4g} | {100 * s['prior_coverage'][k]:.0f} % |"
                      for k, m, (a, b) in zip(names, post.mean, post.interval90))
     loose = [k for k in names if s["prior_coverage"][k] > CONSTRAINED]

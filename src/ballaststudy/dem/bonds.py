@@ -17,6 +17,7 @@ from numba import njit
 
 from . import params as P
 from .jit import LOOP, NO_NRT
+from .neighbours import build_pairs
 
 MODE_TENSION = 1
 MODE_SHEAR = 2
@@ -344,7 +345,6 @@ def bond_energy(pos, bonds, thick):
 def find_bond_candidates(pos, rad, stone, alive, gap_factor):
     """Pairs (i<j) of live balls of one stone (stone >= 0) whose surface gap is below
     g_i = gap_factor * min(R_i, R_j) (Table 4.2: 0.4 * D_small / 2). O(N) via cells."""
-    from .neighbours import build_pairs
     n = len(rad)
     if n < 2:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)

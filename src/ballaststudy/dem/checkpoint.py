@@ -11,6 +11,7 @@ import tempfile
 
 import numpy as np
 
+from .law import ContactLaw
 from .state import Balls, Bonds, BreakLog, Clumps, Pairs, WallPairs, Walls
 
 _PARTS = (("balls", Balls, "b_"), ("walls", Walls, "w_"), ("clumps", Clumps, "c_"),
@@ -47,7 +48,6 @@ def save_state(path, sim):
 
 
 def load_state(path, sim):
-    from .law import ContactLaw
     with np.load(path) as z:
         d = {k: z[k] for k in z.files}
     meta = json.loads(str(d["meta"]))

@@ -3,6 +3,8 @@ import numpy as np
 
 from . import params as P
 from .bonds import bond_energy
+from .bound import elastic_energy
+from .contacts import pack_kinematics
 
 
 def kinetic(sim):
@@ -27,8 +29,6 @@ def gravity_potential(sim):
 def contact_elastic(sim):
     """Strain energy in the springs (normal, shear, rolling) of ball-ball and ball-wall
     contacts, as the contact law defines it [J]."""
-    from .bound import elastic_energy
-    from .contacts import pack_kinematics
     b = sim.balls.kernel()
     kin = np.empty((len(sim.balls), 8))
     pack_kinematics(b, kin)

@@ -62,3 +62,9 @@ class FlatJointMaterial:
 # Table 4.2 densities [kg/m^3]
 DENSITY_HARD = 2950.0
 DENSITY_SOFT = 2800.0
+
+# material ids of the balls (bpm: a stone's rock, the forms file's flag_meanings "hard soft");
+# walls take ids above these (the rigs name theirs)
+HARD, SOFT = 0, 1
+STONE_MATERIALS = (HARD, SOFT)
+MATERIAL_NAMES = ("hard", "soft")

@@ -3,6 +3,7 @@ They are bound as Simulation methods."""
 import numpy as np
 
 from .energy import energies  # noqa: F401  (re-exported as a Simulation method)
+from .fragments import fragments as label_fragments
 
 
 def wall_force(sim, ids=None):
@@ -79,11 +80,10 @@ def intact_bonds(sim):
 def fragments(sim, n_balls=None):
     """Fragment label of balls 0..n_balls-1 (default: all; dead balls -1), numbered by lowest
     ball id: connected components over the intact bonds among those balls."""
-    from .fragments import fragments as label
     b, bd = sim.balls, sim.bonds
     n = len(b) if n_balls is None else int(n_balls)
     keep = intact_bonds(sim) & (bd.i < n) & (bd.j < n)
-    return label(n, bd.i[keep], bd.j[keep], np.ones(int(keep.sum()), bool),
+    return label_fragments(n, bd.i[keep], bd.j[keep], np.ones(int(keep.sum()), bool),
                  ballast=b.alive[:n] == 1)[1]
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from ..config import ConfigError
+from ..schema import ConfigError
 from ..standards.classify import sieve_group, slot_widths_m, stone_flags
 from ..standards import SIZE_GROUP_BOUNDS_MM
 from . import geometry

@@ -7,7 +7,7 @@
 1. The plain model (Table 4.2's or calibrated parameters): K cases under every test; the
    residual per test in the DEM horizon (loop/residual.py) and its relation to the tests'
    covariates.
-2. Every candidate effect (loop.effects): K cases under every test at a design of its
+2. Every candidate effect (a modifier of role effect, scenario.modifiers): K cases under every test at a design of its
    parameter, refined `refine_rounds` times around its held-out posteriors (refined_design);
    held-out (leave one test out) predictive densities and the rule (loop/select.py) choose
    one effect or none. With specimen_share 0 (model-made data on
@@ -24,8 +24,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import ConfigError, load_config
+from ..calibration.bayes import initial_design
+from ..calibration.cli import checked_targets, target_arguments
+from ..calibration.evaluate import Evaluator
+from ..config import ConfigError, job_seed, load_config
 from ..inputs import writable_dir
+from ..measured.importer import load_conditions
+from ..provenance import Recorder
+from ..scenario.modifiers import EFFECTS, MODIFIERS, load_material_values
+from .outcome import LoopRun, PlainModel, Selection, Targets
+from .report import write_outputs
+from .select import choose, held_out_plain, judge_candidate, residual_covariances
 
 # the chaos probe's velocity perturbation (specimen_share 0): far below any physical speed
 # of the test; the chaos it starts is saturated - runs perturbed by 1e-9, 1e-6 and 1e-4 m/s
@@ -34,9 +43,13 @@ PROBE_M_S = 1e-9
 
 
 def check_loop_targets(cfg, config_file, tests, tests_dir):
-    """Every loop.targets entry a measured triaxial/biaxial test (names relative to
+    """Every loop.effects entry an effect of the registry; every loop.targets entry a
+    measured triaxial/biaxial test (names relative to
     measured.tests_dir) when there are any, each once; ConfigError naming the key."""
-    from ..measured.importer import load_conditions
+    for k, name in enumerate(cfg["loop"]["effects"]):
+        if name not in EFFECTS:
+            raise ConfigError(config_file, f"loop.effects[{k}]", f"{name!r} is not an effect; allowed: "
+                              f"{', '.join(EFFECTS)}")
     targets = cfg["loop"]["targets"]
     for k, target in enumerate(targets):
         if tests and target not in tests:
@@ -52,7 +65,6 @@ def check_loop_targets(cfg, config_file, tests, tests_dir):
 def _points(args, cfg):
     """[(N, values)] of every target within the simulated cycles, checked like calibrate's;
     biaxial specimens only."""
-    from ..calibration.cli import checked_targets
     measured, kind = checked_targets(args, cfg["loop"], "loop")
     if kind != "biaxial":
         raise ConfigError(args.specimens[0], "rig_kind", f"{kind}; allowed: biaxial specimens (the "
@@ -65,7 +77,6 @@ def design(lower, upper, n, seed):
     (the surrogate never extrapolates, and an effect's bound where it is off - no wear, no
     fouling - is run: without it the posterior drifted to the unrun end, where the
     surrogate's width alone fitted the data); more parameters a Latin hypercube."""
-    from ..calibration.bayes import initial_design
     if len(lower) == 1:
         return np.linspace(lower[0], upper[0], n)[:, None]
     return initial_design(lower, upper, n, seed)
@@ -84,7 +95,6 @@ def refined_design(theta_means, lower, upper, spacing, n, seed):
     ``spacing`` each round zooms in. Where the sets go depends on the tests (each fold's
     posterior leaves one out, their union does not); a held-out test is still predicted
     from the other tests' posterior only."""
-    from ..calibration.bayes import initial_design
     theta_means = np.atleast_2d(theta_means)
     lo = np.maximum(lower, theta_means.min(axis=0) - 0.75 * spacing)
     hi = np.minimum(upper, theta_means.max(axis=0) + 0.75 * spacing)
@@ -95,11 +105,9 @@ def refined_design(theta_means, lower, upper, spacing, n, seed):
 
 def _run_candidates(make, names, lp, seed):
     """{effect: (thetas (J, d), [(K, P)] per set, Evaluator)}: every design set under every test."""
-    from ..config import job_seed
-    from .effects import EFFECTS
     out = {}
     for name in names:
-        eff = EFFECTS[name]
+        eff = MODIFIERS[name]
         thetas = design(*_bounds(name), lp["design_sets"], job_seed(seed, f"loop/{name}"))
         evaluate = make([p.name for p in eff.parameters], name)
         out[name] = (thetas, evaluate(thetas), evaluate)
@@ -107,8 +115,7 @@ def _run_candidates(make, names, lp, seed):
 
 
 def _bounds(name):
-    from .effects import EFFECTS
-    ps = EFFECTS[name].parameters
+    ps = MODIFIERS[name].parameters
     return np.array([p.low for p in ps]), np.array([p.high for p in ps])
 
 
@@ -119,13 +126,12 @@ class Candidate:
     at: list                 # J arrays (K, P): its cases at the measured points
     held: object             # select.HeldOut of the candidate
     fit: tuple               # select.fit_all: (mean (d,), interval90 (d, 2), ess)
-    evaluate: object         # its runner.Evaluator (sets: every run, design first)
+    evaluate: object         # its calibration.evaluate.Evaluator (sets: every run, design first)
 
 
 def _refine(runs, plain_at, probe_at, y, point_test, lp, seed):
     """_judge after ``refine_rounds`` rounds of refined_design sets added to every
     candidate's runs (in place; the grid's spacing halved each round)."""
-    from ..config import job_seed
     candidates, plain = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
     for r in range(lp["refine_rounds"]):
         for name, (thetas, at, evaluate) in runs.items():
@@ -142,7 +148,6 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
     """({effect: Candidate}, the plain model's select.HeldOut): every candidate and the
     plain model under one noise model, made from the plain runs
     (select.residual_covariances)."""
-    from .select import held_out_plain, judge_candidate, residual_covariances
     covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
                                             probe_at)
     plain = held_out_plain(plain_at, y, point_test, plain_covs)
@@ -154,26 +159,19 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
 
 
 def _loop(args):
-    from ..calibration.parameters import load_calibrated
-    from ..measured.importer import load_conditions
-    from ..provenance import Recorder
-    from .effects import EFFECTS
-    from .report import write_outputs
-    from .select import choose
     cfg = load_config(args.config)
     lp = cfg["loop"]
     out = writable_dir(args.out_dir)
     measured = _points(args, cfg)
-    base = load_calibrated(args.parameters) if args.parameters else {}
-    y = np.concatenate([v for _, v in measured])
-    point_test = np.concatenate([np.full(n.size, j) for j, (n, _) in enumerate(measured)])
+    base = load_material_values(args.parameters) if args.parameters else {}
+    targets = Targets(args.conditions, args.measured, measured)
+    y, point_test = targets.y, targets.point_test
     recorder = Recorder("loop", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
                                         *([args.parameters] if args.parameters else [])),
                         params={"loop": lp, "base": base}, seed=cfg["seed"])
     t0 = time.time()
 
     def make(names, effect=None, perturbation_m_s=0.0):
-        from ..calibration.runner import Evaluator
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
                          progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s)
@@ -183,7 +181,7 @@ def _loop(args):
     probe_eval = make([], perturbation_m_s=PROBE_M_S) if lp["specimen_share"] == 0 else None
     probe_at = probe_eval(np.zeros((1, 0)))[0] if probe_eval else None
     conditions = [load_conditions(c) for c in args.conditions]
-    untestable = [e for e in lp["effects"] if not EFFECTS[e].testable(conditions)]
+    untestable = [e for e in lp["effects"] if not MODIFIERS[e].testable(conditions)]
     runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
     candidates, plain = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"])
     chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()})
@@ -193,21 +191,20 @@ def _loop(args):
         best.evaluate(best.fit[0][None])            # the chosen effect at its fitted value
         after = best.evaluate.sets[-1]
     probe_set = probe_eval.sets[0] if probe_eval else None
-    files = write_outputs(out, args, lp, measured, plain_eval.sets[0], plain_at.mean(axis=0), candidates, evidence,
-                          chosen, after, base, untestable, minutes=(time.time() - t0) / 60, probe_set=probe_set,
-                          plain_held=plain)
+    files = write_outputs(out, LoopRun(
+        lp, targets,
+        PlainModel(plain_eval.sets[0], plain_at.mean(axis=0), plain, probe_set),
+        Selection(candidates, evidence, chosen, after, untestable), base, minutes=(time.time() - t0) / 60))
     recorder.finish()
     sets = plain_eval.sets + (probe_eval.sets if probe_eval else []) + [st for c in candidates.values() for st in c.evaluate.sets]
-    cases = [out / "cases" / st["key"] / f"test{j}" / f"case{k}.nc"   # this run's sets (the
-             for st in sets for j in range(len(args.measured))       # folder may cache older ones)
-             for k in range(len(args.specimens))]
+    cases = [f for st in sets for per_test in st["cases"] for f in per_test]  # this run's sets
+    # (the cache folder may hold older ones)
     recorder.write_beside(files[0], also=files[1:] + cases)
     if not args.quiet:
         print(f"wrote {out}: effect chosen: {chosen or 'none'}")
 
 
 def register(subparsers):
-    from ..calibration.cli import target_arguments
     c = subparsers.add_parser("loop", help="residuals, candidate effects on held-out tests, the "
                               "long-term horizon (issue 14)")
     target_arguments(c, "K assembled biaxial specimens (case assemble --rig biaxial)")

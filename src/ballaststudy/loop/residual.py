@@ -2,7 +2,7 @@
 cycles), and their attribution to the tests' declared covariates (issue 14).
 
 Per test: the ensemble of K simulated curves (N = 1..N_sim, cycle k at N = k + 1) at the
-measured points, interpolated in ln N (calibration.runner.at_points); the residual
+measured points, interpolated in ln N (scenario.results.at_points); the residual
 r = measured - ensemble mean, with a pointwise band s (1 + 1/K)^0.5 (+ the measurement sd).
 
 The points of one curve are not independent: a specimen is stiffer or softer all along, so
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ..calibration.runner import at_points
+from ..scenario.results import at_points
 
 ALPHA = 0.05
 

@@ -5,6 +5,7 @@ from pathlib import Path
 
 from ..inputs import input_dir, input_file, writable_file
 from ..provenance import Recorder
+from .compare import write_comparison
 from .importer import curve_files, measured_dataset, write_test
 
 
@@ -24,7 +25,6 @@ def _import(args):
 
 
 def _compare(args):
-    from .compare import write_comparison
     out = writable_file(args.out)
     figure = None if args.no_figure else writable_file(out.with_suffix(".png"))
     inputs = [input_file(p, "expected a netCDF file") for p in (args.measured, *args.cases)]

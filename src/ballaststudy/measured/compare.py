@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from ..atomic import atomic_path
-from ..config import ConfigError
+from ..schema import ConfigError
 from ..inputs import open_netcdf
 from ..metrics.output import VARIABLES
 

@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 
-from ..config import ConfigError
+from ..schema import ConfigError
 
 _SPLIT = re.compile(r"[,;\s]+")
 TO_SI = {"1": 1.0, "%": 0.01, "m": 1.0, "mm": 1e-3}

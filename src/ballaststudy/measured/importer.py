@@ -11,7 +11,7 @@ import numpy as np
 import xarray as xr
 
 from ..atomic import atomic_path
-from ..config import ConfigError, load_yaml, validate
+from ..schema import ConfigError, load_yaml, validate
 from ..metrics.output import VARIABLES
 from .curves import read_curve
 

@@ -69,14 +69,23 @@ class MetricsParams:
         return cls(**kw)
 
 
-SNAPSHOT_KEYS = {
+# what every rig's snapshot holds of its balls, bonds and contacts
+PACKING_KEYS = {
     "pos": "(n,2) ball centres [m]",
     "rad": "(n,) ball radii [m]",
-    "ballast": "(n,) bool, optional: False for plate pebbles, loading ball, deleted balls",
     "bond_i": "(m,) ball id", "bond_j": "(m,) ball id",
     "bond_intact": "(m,) bool: bond has at least one intact element",
     "contact_i": "(c,) ball id", "contact_j": "(c,) ball id (ball-ball contacts only)",
     "contact_fn": "(c,) normal force [N]",
+    "break_mode": "(r,) 1/'tension' or 2/'shear'",
+    "n_elements_per_bond": "int, optional (default 1 = thesis N_r)",
+    "cycle_start_step": "int: first step of this cycle",
+    "cycle_end_step": "int: first step after this cycle",
+}
+
+SNAPSHOT_KEYS = {
+    **PACKING_KEYS,
+    "ballast": "(n,) bool, optional: False for plate pebbles, loading ball, deleted balls",
     "ball_touches_container": "(n,) bool, optional: ball has a contact with a container wall",
     "geometry": "RigGeometry (or a dict of its fields) [m]",
     "bottom_force": "(20,) downward force on each bottom segment [N], compression positive",
@@ -84,11 +93,7 @@ SNAPSHOT_KEYS = {
     "load_y": "(k,) loading-ball y over the cycle [m]",
     "load_force": "(k,) loading-ball force over the cycle [N]",
     "break_step": "(r,) step of every breakage record so far",
-    "break_mode": "(r,) 1/'tension' or 2/'shear'",
     "n_bonds_installed": "int: flat-joint bonds installed when the stones were built",
-    "n_elements_per_bond": "int, optional (default 1 = thesis N_r)",
-    "cycle_start_step": "int: first step of this cycle",
-    "cycle_end_step": "int: first step after this cycle",
 }
 
 

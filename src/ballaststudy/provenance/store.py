@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from ..atomic import atomic_path
-from ..config import ConfigError
+from ..schema import ConfigError
 from ..inputs import input_file
 from .record import sha256_file
 

@@ -9,8 +9,9 @@ records, behaviours, checkpoints), ``records`` / ``output`` (metrics.nc, figures
 (ParaView snapshots), ``library`` (BPM.nc reader, synthetic stand-in).
 The box: ``params`` (RigParams), ``box`` (BoxRig), ``assembly`` (drop, tamping, container
 reset, plate, loading ball, relaxation), ``loading`` (LoadingRun: static servo, cyclic
-profile). The biaxial test: ``biaxial`` (BiaxialParams, BiaxialRig, assemble_biaxial,
-BiaxialRun). ``cli``: ``ballaststudy case assemble|run``.
+profile). The biaxial test: the package ``biaxial``, in the same rooms (``params``,
+``specimen``, ``assembly``, ``loading``, ``output``; BiaxialParams, BiaxialRig,
+assemble_biaxial, BiaxialRun). ``cli``: ``ballaststudy case assemble|run``.
 """
 from .assembly import assemble
 from .biaxial import BiaxialParams, BiaxialRig, BiaxialRun, assemble_biaxial

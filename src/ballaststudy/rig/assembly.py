@@ -16,6 +16,7 @@ moved in, the loading ball.
 import numpy as np
 
 from ..dem import ContactMaterial
+from ..dem.materials import STONE_MATERIALS
 from .box import BoxRig, RigLayout
 from .deposition import (centripetal_pulses, choose_stones, deposition_conditions, drop,
                          new_simulation, place_stones, ramp_gravity, remove_debris, settle,
@@ -60,7 +61,7 @@ def build_tall(lib, params, seed, contact_damping=None):
     lay.left_low, lay.right_low = lay.left[1], lay.right[0]
     lay.bonds_library = place_stones(sim, lib, stones, centres, rng)
     lay.n_stone_balls = len(sim.balls)
-    fj = {m: lib.materials[m]["fj"] for m in (0, 1)}
+    fj = {m: lib.materials[m]["fj"] for m in STONE_MATERIALS}
     lay.bonds_installed = int(sim.install_flat_joints(fj))
     return BoxRig(sim, lay, p)
 

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..atomic import atomic_path
-from ..config import ConfigError
+from ..schema import ConfigError
 from ..inputs import open_checkpoint
 from ..dem.control import PEAK, TROUGH, WINDOW
 

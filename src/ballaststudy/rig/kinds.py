@@ -1,6 +1,12 @@
 """The rig kinds a case can be (``box``: thesis 4.1-4.2; ``biaxial``: the 2D cyclic
 triaxial test) - one place that knows each kind's classes, its parameters from the config
 and which measured tests it runs."""
+from .biaxial import BiaxialParams, BiaxialRig, BiaxialRun, write_biaxial_outputs
+from .box import BoxRig
+from .loading import LoadingRun
+from .output import write_outputs
+from .params import RigParams
+
 KINDS = ("box", "biaxial")
 RUNS_TESTS = {"box": ("box",), "biaxial": ("triaxial", "biaxial")}   # measured test's rig
 
@@ -18,19 +24,13 @@ def kind_for_test(test_rig):
 def rig_classes(kind):
     """(Rig class, run class, output writer) of a rig kind."""
     if kind == "biaxial":
-        from .biaxial import BiaxialRig, BiaxialRun, write_biaxial_outputs
         return BiaxialRig, BiaxialRun, write_biaxial_outputs
-    from .box import BoxRig
-    from .loading import LoadingRun
-    from .output import write_outputs
     return BoxRig, LoadingRun, write_outputs
 
 
 def params_class(kind):
     if kind == "biaxial":
-        from .biaxial import BiaxialParams
         return BiaxialParams
-    from .params import RigParams
     return RigParams
 
 

@@ -13,12 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ..config import ConfigError
+from ..schema import ConfigError
 from ..dem import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial
+from ..dem.materials import HARD, MATERIAL_NAMES, SOFT
 from ..inputs import open_netcdf
 
-HARD, SOFT = 0, 1
-MATERIAL_NAMES = ("hard", "soft")
 
 
 class LibraryError(ConfigError):

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..dem.control import Control
+from ..metrics import MetricsParams, compute_cycle
+from ..metrics.void_ratio import SolidCache
 from .box import BoxRig
 from .cyclic import CycleState, CyclicRun
 
@@ -116,8 +118,6 @@ class LoadingRun(CyclicRun):
             rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
     def _metrics_setup(self):
-        from ..metrics import MetricsParams
-        from ..metrics.void_ratio import SolidCache
         self.metrics_params = MetricsParams.from_config(self.s.metrics_cfg)
         # stone solids reused between cycles; emptied at every checkpoint cycle so that a
         # resumed run computes what an uninterrupted one does
@@ -260,7 +260,6 @@ class LoadingRun(CyclicRun):
 
     def behaviours(self):
         """This cycle's behaviours from ``ballaststudy.metrics`` (JSON-safe dict)."""
-        from ..metrics import compute_cycle
         rows = self.s.rows
         ref = rows[0].get("y_at_level") if rows else None
         out = compute_cycle(self.snapshot(), self.metrics_params, y_reference=ref,

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
-from .records import write_metrics
+from .records import breakage_records, write_metrics
 
 
 def plot_case(rig, path, breakages=None, title=""):
@@ -76,7 +76,6 @@ def plot_behaviours(ds, path):
 
 def write_figures(run, ds, out, what=""):
     """case.png and behaviours.png beside ``out`` (any rig)."""
-    from .records import breakage_records
     out = Path(out)
     plot_case(run.rig, out.with_name("case.png"), breakage_records(run),
               title=f"{ds.attrs['database']} seed {ds.attrs['seed']}: {what}after "

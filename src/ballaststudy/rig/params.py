@@ -7,7 +7,7 @@ the stage a key belongs to decides what reruns when it is edited (workflow/rules
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from ..config import job_seed
+from ..seeds import job_seed
 from .deposition import DepositionParams
 
 

@@ -11,8 +11,9 @@ import json
 import numpy as np
 import xarray as xr
 
+from ..metrics import metrics_dataset
+from ..metrics.output import write_metrics as write_metrics_file
 from .loading import CYCLE_FIELDS
-
 
 
 def breakage_records(run):
@@ -37,7 +38,6 @@ def behaviours(run, ds, n_elements):
     settlement and breakage rates straight from the records (eqs. 4.6-4.8)."""
     rows = run.s.rows
     if rows and all(rows):
-        from ..metrics import metrics_dataset
         ds.attrs["metrics_package"] = "ballaststudy.metrics (compute_cycle per cycle)"
         return {k: v for k, v in metrics_dataset(rows).data_vars.items()}
     ds.attrs["metrics_package"] = ("not installed: settlement and breakage rates from the "
@@ -153,9 +153,8 @@ def to_dataset(run, attrs=None):
 def write_metrics(run, path, attrs=None):
     """metrics.nc of a run, through the one metrics writer (every variable with units and
     long_name, atomic)."""
-    from ..metrics.output import write_metrics as write
     ds = to_dataset(run, attrs)
-    write(path, ds)
+    write_metrics_file(path, ds)
     return ds
 
 
@@ -179,7 +178,6 @@ def cyclic_dataset(run, channel_units, title, attrs=None):
     """metrics.nc of any cyclic run: its cycle records, its time series (one variable per
     channel, ``channel_units``: name -> (units, long name)), the breakage records and the
     behaviours per cycle (ballaststudy.metrics' variable table)."""
-    from ..metrics import metrics_dataset
     n = len(run.cyc["cycle_end_step"])
     data = {}
     for k, (units, long_name) in run.CYCLE_FIELDS.items():

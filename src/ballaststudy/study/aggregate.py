@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from ..atomic import atomic_path
-from ..config import ConfigError
+from ..schema import ConfigError
 from ..forms.validate import validation_row
 from ..inputs import open_netcdf
 from ..metrics.output import VARIABLES

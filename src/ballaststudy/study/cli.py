@@ -8,6 +8,8 @@ from ..config import ConfigError
 from ..provenance import Recorder
 from ..inputs import open_netcdf, writable_dir, writable_file
 from .aggregate import BEHAVIOURS, aggregate, identify_metrics
+from .iri import write_iri
+from .report import write_report
 from ..argtypes import SEED, integer, number
 
 
@@ -61,7 +63,6 @@ def _write_with_provenance(step, args, params, write):
 def _study_iri(args):
     writable_dir(args.out)
     study = _load_study(args.study)
-    from .iri import write_iri
     _write_with_provenance("study iri", args, {"resamples": args.resamples, "min_rho": args.min_rho},
                            lambda: write_iri(study, args.out, args.resamples, args.seed, args.min_rho))
 
@@ -69,7 +70,6 @@ def _study_iri(args):
 def _study_optimise(args):
     writable_dir(args.out)
     study = _load_study(args.study)
-    from .report import write_report
     _write_with_provenance("study optimise", args, {"resamples": args.resamples},
                            lambda: write_report(study, args.out, args.resamples, args.seed, str(args.study)))
 

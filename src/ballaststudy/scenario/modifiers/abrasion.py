@@ -7,7 +7,7 @@ weaken cycle after cycle and break off at loads they first carried; the damage i
 joint strengths themselves, so checkpoints carry it."""
 import numpy as np
 
-from . import Effect, EffectParameter
+from .base import Modifier, ModifierParameter
 
 
 def strong_balls(rig):
@@ -39,8 +39,8 @@ def hook(values):
     return end_of_cycle
 
 
-EFFECT = Effect(
+MODIFIER = Modifier(
     "abrasion", "flat joints of stone balls in the strong force network lose a share of their "
     "strength every cycle",
-    (EffectParameter("wear_per_cycle", "share of a loaded joint's strength lost per cycle", "1", 0.0, 0.2),),
+    (ModifierParameter("wear_per_cycle", "share of a loaded joint's strength lost per cycle", "1", 0.0, 0.2),),
     hook=hook)

@@ -1,6 +1,8 @@
 """Data with an undeclared effect (issue 14): "measured" tests made by the model itself with
 one candidate effect switched on - at a strength the data do not state - and digitised like
-the shared measurements, so that the loop can be checked where the answer is known.
+the shared measurements, so that the loop can be checked where the answer is known. A helper
+of tests/loop and bench/loop_undeclared.py, not of the package: it drives the command line
+with argument lists as a user would.
 
 A planted test's curve is the ensemble mean of the given specimens under the effect (run
 through the loop's own runner, so the truth's cases sit in the same cache), read off at
@@ -12,12 +14,22 @@ covariates; no effect, no strength) and the curve file, imported to the test's n
 Given the loop's own specimens the truth is the model's ensemble with the effect (common
 random numbers: the effect's signature without a new specimen's scatter, run the loop with
 ``specimen_share`` 0); given fresh specimens it carries their scatter too (share 1)."""
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 import yaml
+
+from ballaststudy.calibration.bayes import rmse
+from ballaststudy.calibration.evaluate import Evaluator
+from ballaststudy.scenario.results import at_points
+from ballaststudy.cli import main
+from ballaststudy.loop.select import chaos_covariance
+from ballaststudy.measured.importer import import_test
+from ballaststudy.rig.library import synthetic_library
 
 POINTS = (11, 35)           # digitised points per curve, as in the shared measured data
 NOISE_SHARE = 0.01          # the digitiser's noise, sd as a share of the curve's final value
@@ -58,7 +70,6 @@ def truth_runs(tests_yaml, specimens, config, cycles, out_dir, effect=None, valu
     at ``values`` (None: the plain model), cases cached under out_dir/cases; from velocities
     perturbed by ``perturbation_m_s`` if > 0 (a chaos probe of the truth; probes 0, 1, ...
     perturb in independent directions)."""
-    from ..calibration.runner import Evaluator
     values = dict(values or {})
     evaluate = Evaluator(list(values), specimens, [(c, np.arange(1.0, cycles + 1)) for c in tests_yaml],
                          config, cycles, "axial_strain", out_dir, jobs=jobs, effect=effect, base=base,
@@ -81,8 +92,6 @@ def irreducible_rmse(runs, probes, cycles, point_test, noise_sd):
     (M, T, K, cycles): the same runs from velocities perturbed M times. The truth is one
     chaotic draw about the effect's smooth trend; a surrogate over other parameter values
     predicts at best that trend. Points grouped by test, 0 first, as the loop's."""
-    from ..calibration.runner import at_points
-    from .select import chaos_covariance
     cycles, point_test = np.asarray(cycles, float), np.asarray(point_test)
     tests = range(len(runs))
 
@@ -98,7 +107,6 @@ def plant(folder, tests, specimens, config, cycles, effect=None, values=None, ba
           noise_share=NOISE_SHARE, seed=0, cache=None, jobs=1):
     """Write the planted tests t<j>.yaml / t<j>.dat / t<j>.nc into ``folder``; returns
     (measured netCDFs, conditions YAMLs). The truth's cases go to ``cache`` (default folder)."""
-    from ..measured.importer import import_test
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     conditions = []
@@ -146,8 +154,6 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
     """A synthetic BPM library, a config for the loop at this scale and ``cases`` assembled
     biaxial specimens in ``folder``; returns (specimens, config, base parameters YAML). The
     defaults are the slow test's scale (tests/loop/test_undeclared.py says why)."""
-    from ..cli import main
-    from ..rig.library import synthetic_library
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     lib = library_spec(library)
@@ -174,12 +180,6 @@ def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, 
     """Plant SCENARIO_TESTS with effect ``name`` (PLANTED; "none": the plain model) and run
     the loop on them, its cases cached in ``folder``/cases (shared by the scenarios).
     Returns (chosen effect or None, the candidates' evidence, the plain model's RMSE)."""
-    import json
-
-    import xarray as xr
-
-    from ..calibration.bayes import rmse
-    from ..cli import main
     folder = Path(folder)
     measured, conditions = plant(folder / name / "tests", SCENARIO_TESTS, truth_specimens or specimens,
                                  folder / "config.yaml", cycles, None if name == "none" else name,

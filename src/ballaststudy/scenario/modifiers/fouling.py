@@ -7,21 +7,21 @@ coefficient falls in proportion to VCI,
 
 loss (the parameter) being the friction a fully clogged void structure takes away. Tests
 that declare no VCI are clean (VCI = 0): the effect leaves them unchanged."""
-from . import Effect, EffectParameter, covariate
+from ...dem.materials import STONE_MATERIALS
+from .base import Modifier, ModifierParameter, covariate
 
-STONE_MATERIALS = (0, 1)
 
 
-def configure(rig, values, conditions):
-    factor = 1.0 - values["friction_loss"] * covariate(conditions, "VCI") / 100.0
+def configure(rig, values, covariates):
+    factor = 1.0 - values["friction_loss"] * covariate(covariates, "VCI") / 100.0
     mu = rig.sim.contact_coefficient("mu")
     for a in STONE_MATERIALS:
         for b in STONE_MATERIALS:
             rig.sim.set_contact_coefficient("mu", mu[a, b] * factor, a, b)
 
 
-EFFECT = Effect(
+MODIFIER = Modifier(
     "fouling", "stone-stone friction reduced in proportion to the void contamination index VCI",
-    (EffectParameter("friction_loss", "share of the stone-stone friction lost at VCI = 100 %",
+    (ModifierParameter("friction_loss", "share of the stone-stone friction lost at VCI = 100 %",
                      "1", 0.0, 0.9),),
     configure, covariate="VCI")

@@ -1,4 +1,4 @@
-"""The loop's effects (loop.effects) on a small assembled biaxial specimen: each switches on
+"""The effect modifiers (scenario.modifiers, role "effect": the loop's candidates) on a small assembled biaxial specimen: each switches on
 exactly the mechanism its docstring names and nothing else, so a fitted effect strength
 means what the report says it means.
 
@@ -11,7 +11,7 @@ abrasion       the strong network (normal force above the stone-stone mean) reco
                runner's cycles once per cycle, and a run resumed from its checkpoint
                re-attaches the hook (same curve and same final joint strengths as an
                uninterrupted one, where a resume without the hook differs)
-check          a value out of bounds or a missing / extra name is a ValueError naming the effect
+check          a value out of bounds or a missing / extra name is a ValueError naming the modifier
 Tolerances are tight (1e-12 relative, 10 % on the cycle duration): a sign or a factor of
 two in any formula fails them."""
 import shutil
@@ -21,14 +21,13 @@ import numpy as np
 import pytest
 import yaml
 
-import ballaststudy.loop.effects as effects
-from ballaststudy.calibration.parameters import apply_parameters
-from ballaststudy.calibration.runner import Evaluator, run_case
+from ballaststudy.calibration.evaluate import Evaluator
 from ballaststudy.config import load_config
 from ballaststudy.inputs import open_netcdf
-from ballaststudy.loop.effects import EFFECTS, hooks, switch_on
-from ballaststudy.loop.effects.abrasion import strong_balls, wear
 from ballaststudy.measured.importer import load_conditions
+from ballaststudy.scenario import runner
+from ballaststudy.scenario.modifiers import EFFECTS, MODIFIERS, covariate
+from ballaststudy.scenario.modifiers.abrasion import strong_balls, wear
 from ballaststudy.rig.biaxial import MEMBRANE, PLATEN, BiaxialParams, BiaxialRig, BiaxialRun
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -79,7 +78,7 @@ def test_fouling_scales_stone_stone_friction_by_vci(setup, vci):
     cond = load_conditions(_conditions(setup[2], f"fouling{vci}", **extra))
     rig = _rig(setup, cond)
     mu0 = rig.sim.contact_coefficient(MU)
-    switch_on("fouling", rig, {"friction_loss": 0.4}, cond)
+    MODIFIERS["fouling"].apply(rig, {"friction_loss": 0.4}, cond.get("covariates"))
     mu = rig.sim.contact_coefficient(MU)
     expected = mu0.copy()
     expected[:2, :2] *= 1.0 - 0.4 * (vci or 0.0) / 100.0      # 0.9 at VCI 25 %
@@ -96,7 +95,7 @@ def test_end_restraint_sets_stone_platen_friction_only(setup):
     rig = _rig(setup, cond)
     mu0 = rig.sim.contact_coefficient(MU)
     assert not np.any(mu0[:2, PLATEN] == 0.25)
-    switch_on("end_restraint", rig, {"platen_friction": 0.25}, cond)
+    MODIFIERS["end_restraint"].apply(rig, {"platen_friction": 0.25}, cond.get("covariates"))
     mu = rig.sim.contact_coefficient(MU)
     expected = mu0.copy()
     expected[:2, PLATEN] = expected[PLATEN, :2] = 0.25
@@ -109,7 +108,7 @@ def test_rate_real_time_undamped_with_dashpot_and_cycles_last_one_period(setup):
         cond = load_conditions(_conditions(setup[2], f"rate{f:g}", frequency_Hz=f))
         rig = _rig(setup, cond)
         beta0 = rig.sim.contact_coefficient(BETA)
-        switch_on("rate", rig, {"contact_damping_ratio": 0.3}, cond)
+        MODIFIERS["rate"].apply(rig, {"contact_damping_ratio": 0.3}, cond.get("covariates"))
         assert rig.params.mode == "real_time" and rig.params.frequency_Hz == f
         assert np.all(rig.sim.balls.damp == 0.0)
         beta = rig.sim.contact_coefficient(BETA)
@@ -159,35 +158,32 @@ def test_abrasion_over_cycles_and_resumed_through_the_runner(setup, monkeypatch)
     base = {"F_str_co": 1.0}        # weaker joints: the wear breaks some, the curve feels it
     ev = Evaluator(["wear_per_cycle"], [asm], [(cond_path, [1.0, 2.0, 3.0])], config, 3,
                    "axial_strain", folder / "ev", effect="abrasion", base=base)
-    _, per_test = ev.jobs_for({"wear_per_cycle": 0.05})
-    job = per_test[0][0]
-    assert set(job) == {"specimen", "values", "cycles", "rig", "effect", "effect_values",
-                        "metrics", "conditions", "out", "perturbation_m_s", "perturbation_seed"}
-    assert job["perturbation_m_s"] == 0.0
-    assert job["effect"] == "abrasion" and job["values"] == base and job["cycles"] == 3
+    (sc,) = ev.scenarios({"wear_per_cycle": 0.05})
+    assert sc.perturbation_m_s == 0.0 and sc.cycles == 3
+    assert sc.modifier_values() == [("F_str_co", base), ("abrasion", {"wear_per_cycle": 0.05})]
 
-    records, real_hooks = [], effects.hooks             # joint strengths at every cycle end
-    monkeypatch.setattr(effects, "hooks", lambda name, values: real_hooks(name, values) + [
+    records, real_hooks = [], runner._hooks             # joint strengths at every cycle end
+    monkeypatch.setattr(runner, "_hooks", lambda s: real_hooks(s) + [
         lambda run, cycle: records.append((cycle, run.rig.sim.bonds.sigc.copy(),
                                            run.rig.sim.intact_bonds()))])
-    full = run_case(job)
+    full = runner.run_case(sc, 0, folder / "full" / "case0.nc")
     full_records, records[:] = list(records), []
 
     out2 = folder / "resumed" / "case0.nc"
     out2.parent.mkdir()
     ckpt = out2.with_name(out2.stem + ".checkpoint.npz")
     rig = BiaxialRig.from_dataset(open_netcdf(asm, "assembled"), "engine_checkpoint")
-    rig.params = BiaxialParams(**job["rig"])
-    apply_parameters(rig, job["values"])
+    rig.params = sc.rig
+    MODIFIERS["F_str_co"].apply(rig, base)
     sigc0 = rig.sim.bonds.sigc.copy()
-    switch_on("abrasion", rig, job["effect_values"], load_conditions(job["conditions"]))
-    run = BiaxialRun(rig, 3, checkpoint=ckpt, checkpoint_every=1, metrics=job["metrics"])
-    run.hooks += real_hooks("abrasion", job["effect_values"])
+    MODIFIERS["abrasion"].apply(rig, {"wear_per_cycle": 0.05}, sc.covariates)
+    run = BiaxialRun(rig, 3, checkpoint=ckpt, checkpoint_every=1, metrics=sc.metrics)
+    run.hooks += MODIFIERS["abrasion"].hooks({"wear_per_cycle": 0.05})
     run.run(stop_after=1)
     assert run.s.cycle == 1 and ckpt.is_file()
     spare = folder / "spare.checkpoint.npz"
     shutil.copy(ckpt, spare)
-    resumed = run_case(dict(job, out=str(out2)))
+    resumed = runner.run_case(sc, 0, out2)
     assert [c for c, *_ in full_records] == [0, 1, 2] and [c for c, *_ in records] == [1, 2]
 
     strain = [open_netcdf(p, "metrics")["axial_strain"].values for p in (full, resumed)]
@@ -210,23 +206,22 @@ def test_abrasion_over_cycles_and_resumed_through_the_runner(setup, monkeypatch)
 
 
 @pytest.mark.parametrize("name", sorted(EFFECTS))
-def test_check_rejects_bad_values_naming_the_effect(name):
-    effect = EFFECTS[name]
+def test_check_rejects_bad_values_naming_the_modifier(name):
+    effect = MODIFIERS[name]
     (p,) = effect.parameters
     effect.check({p.name: p.low})
     effect.check({p.name: p.high})
     mid = 0.5 * (p.low + p.high)
     for bad in ({p.name: p.low - 0.01}, {p.name: p.high + 0.01}, {p.name: -p.high}, {},
                 {p.name: mid, "extra": mid}, {"other": mid}):
-        with pytest.raises(ValueError, match=f"effect {name}"):
+        with pytest.raises(ValueError, match=f"modifier {name}"):
             effect.check(bad)
-        with pytest.raises(ValueError, match=f"effect {name}"):
-            switch_on(name, None, bad, {})          # checked before the rig is touched
-    assert len(hooks(name, {p.name: mid})) == (name == "abrasion")
+        with pytest.raises(ValueError, match=f"modifier {name}"):
+            effect.apply(None, bad)                 # checked before the rig is touched
+    assert len(effect.hooks({p.name: mid})) == (name == "abrasion")
 
 
 @pytest.mark.parametrize("cov", [{"value": 150.0, "units": "%"}, {"value": 0.5, "units": "1"}])
 def test_fouling_refuses_a_vci_it_cannot_read(cov):
-    from ballaststudy.loop.effects import covariate
     with pytest.raises(ValueError, match="covariate VCI"):
-        covariate({"covariates": {"VCI": cov}}, "VCI")
+        covariate({"VCI": cov}, "VCI")

@@ -3,18 +3,18 @@ triaxial specimen's ends sit on the platens through an imperfect bedding; rough 
 restrain the lateral spreading of the end zones, lubricated or poorly bedded ones let the
 stones slide out (a classic source of differences between triaxial tests). The parameter is
 the stone-platen friction coefficient (the plain model: Table 4.2's stone friction)."""
-from . import Effect, EffectParameter
+from ...dem.materials import STONE_MATERIALS
+from ...rig.biaxial import PLATEN
+from .base import Modifier, ModifierParameter
 
-STONE_MATERIALS = (0, 1)
 
 
-def configure(rig, values, conditions):
-    from ...rig.biaxial import PLATEN
+def configure(rig, values, covariates):
     for a in STONE_MATERIALS:
         rig.sim.set_contact_coefficient("mu", values["platen_friction"], a, PLATEN)
 
 
-EFFECT = Effect(
+MODIFIER = Modifier(
     "end_restraint", "stone-platen friction (rough, lubricated or poorly bedded specimen ends)",
-    (EffectParameter("platen_friction", "friction coefficient between stones and platens", "1", 0.0, 1.2),),
+    (ModifierParameter("platen_friction", "friction coefficient between stones and platens", "1", 0.0, 1.2),),
     configure)

@@ -3,12 +3,12 @@ masses, sinusoidal deviator) instead of quasi-static loading, with the PFC local
 off - a numerical device for quasi-static runs that would swallow the inertia - and energy
 dissipated by friction, breakage and a viscous normal dashpot at every stone contact,
 whose damping ratio (of critical) is the parameter: the contact's own rate dependence."""
-from . import Effect, EffectParameter
+from ...dem.materials import STONE_MATERIALS
+from .base import Modifier, ModifierParameter
 
-STONE_MATERIALS = (0, 1)
 
 
-def configure(rig, values, conditions):
+def configure(rig, values, covariates):
     rig.params.mode = "real_time"           # frequency_Hz: the test's (take_conditions)
     sim = rig.sim
     sim.set_damping(0.0)
@@ -17,9 +17,9 @@ def configure(rig, values, conditions):
             sim.set_contact_coefficient("beta_n", values["contact_damping_ratio"], a, b)
 
 
-EFFECT = Effect(
+MODIFIER = Modifier(
     "rate", "real-time loading at the test's frequency (inertia) with a viscous normal dashpot "
     "at the stone contacts, no local damping",
-    (EffectParameter("contact_damping_ratio", "normal dashpot damping ratio of the stone contacts",
+    (ModifierParameter("contact_damping_ratio", "normal dashpot damping ratio of the stone contacts",
                      "1", 0.05, 0.7),),
     configure)

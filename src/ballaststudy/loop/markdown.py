@@ -1,0 +1,135 @@
+"""report.md: the loop's findings in words and tables, one section per question (how far
+the plain model is off per test, what that relates to, which effect helps on held-out
+tests, what the long-term horizon implies); numbers from statistics.LoopStatistics."""
+import numpy as np
+
+from ..metrics.output import display_scale
+from ..scenario.modifiers import MODIFIERS
+from .select import ALPHA
+from .statistics import LONG_TERM_LAWS, SIGNALS
+
+
+def report_markdown(run, stats):
+    """report.md's text from an outcome.LoopRun and its statistics.LoopStatistics."""
+    scale, unit = display_scale(run.settings["quantity"])
+    lines = (_opening(run, stats, unit) + _dem_horizon(stats, scale) + _covariates(stats)
+             + _candidates(run, stats, scale, unit) + _verdict(run, stats, scale, unit)
+             + _long_term(stats, scale, run.targets.names, run.settings["cycles"]))
+    return "\n".join(lines) + "\n"
+
+
+def _fmt_p(p):
+    return "-" if not np.isfinite(p) else f"{p:.2g}"
+
+
+def _opening(run, stats, unit):
+    lp = run.settings
+    q = lp["quantity"].replace("_", " ")
+    refined = (f" + {lp['refine_rounds']} x {lp['refine_sets']} refined around the held-out posteriors"
+               if lp["refine_rounds"] else "")
+    return ["# Closing the loop with measured data", "",
+            f"{len(stats.before)} tests, {lp['cases']} specimens per model and test, {lp['cycles']} simulated cycles "
+            f"(the DEM horizon); {len(stats.candidates)} candidate effects at {lp['design_sets']} parameter sets each"
+            f"{refined}; "
+            f"{run.dem_cases} DEM cases ({run.minutes:.1f} min in this run; cases found in the cache are not rerun). "
+            f"Quantity: {q} [{unit}].", ""]
+
+
+def _dem_horizon(stats, scale):
+    lines = ["## DEM horizon: measured vs the plain model, per test", "",
+             "Residual = measured - ensemble mean at the measured points (N <= the simulated cycles). "
+             "Bias and slope (per unit ln N) are judged as one more specimen of the ensemble (p: two-sided "
+             "prediction test; K - 1 degrees of freedom).", "",
+             "| test | p kPa | f Hz | VCI % | points | RMSE before | RMSE after (fitted) | bias (p) | slope ln N (p) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for j, r in enumerate(stats.before):
+        a = stats.after[j]["rmse"] * scale if stats.after else float("nan")
+        lines.append(f"| {r['test']} | {r.get('confining_pressure_kPa', float('nan')):g} | {r.get('frequency_Hz', float('nan')):g} | "
+                     f"{r.get('VCI', 0):g} | {r['points']} | {scale * r['rmse']:.3g} | {a:.3g} | "
+                     f"{scale * r['bias']:.3g} ({_fmt_p(r['bias_p'])}) | {scale * r['slope_ln_n']:.3g} ({_fmt_p(r['slope_p'])}) |")
+    return lines
+
+
+def _covariates(stats):
+    lines = ["", "## What the residual relates to (across tests)", "",
+             "Least squares of each test's bias and slope on each declared covariate and on each of the "
+             "plain model's internal signals at its last cycle (" + ", ".join(SIGNALS) + "; mean of the "
+             "cases), one intercept per source study (a grouping factor), t-test p, Holm-adjusted over "
+             "everything tried for that response.", "",
+             "| response | covariate | tests | slope | p | p (Holm) | significant |", "|---|---|---|---|---|---|---|"]
+    for r in stats.covariates:
+        if r["tried"]:
+            lines.append(f"| {r['response']} | {r['covariate']} | {r['tests']} | {r['slope']:.3g} | "
+                         f"{_fmt_p(r['p'])} | {_fmt_p(r['p_holm'])} | {'yes' if r['significant'] else 'no'} |")
+        else:
+            lines.append(f"| {r['response']} | {r['covariate']} | {r['tests']} | - | - | - | not tried (no variation within a source, one test alone carries it, or too few tests) |")
+    return lines
+
+
+def _noise_words(lp):
+    if lp["specimen_share"] == 0:
+        return ("the measured curves are taken as runs of the model's own specimens, so the scatter is "
+                "chaos / K: the plain ensemble run again from velocities perturbed by round-off size "
+                "(the chaos probe), plus the measurement's.")
+    return (f"the measured specimen scatters like {lp['specimen_share']:g} x one of the plain model's, "
+            "plus 1/K of that for the ensemble mean, plus the measurement's.")
+
+
+def _verdict_of(c, candidates):
+    """A candidate's verdict under select.choose's rule (the Bonferroni level over the candidates)."""
+    if c["chosen"]:
+        return "chosen"
+    if c["p"] >= ALPHA / candidates:
+        return "rejected: gain not consistent across tests"
+    return "passes, smaller gain" if c["gain"] > 0 else "rejected: no gain"
+
+
+def _candidates(run, stats, scale, unit):
+    cands = stats.candidates
+    lines = ["", "## Candidate effects, judged on held-out tests", "",
+             "Each test left out once: the effect's parameter fitted on the others, the left-out test's "
+             "points predicted. Gain = sum over tests of held-out log predictive density minus the plain "
+             "model's, every model under one noise model: " + _noise_words(run.settings)
+             + f" Rule: one-sided Wilcoxon signed-rank test of the per-test gains, p < {ALPHA:g} / "
+             f"{len(cands)} (candidates); the largest gain among the passing is chosen.", "",
+             "| effect | parameter: fitted mean [90 %] | gain | SE | tests better | p | held-out RMSE | verdict |",
+             "|---|---|---|---|---|---|---|---|"]
+    for c in cands:
+        par = ", ".join(f"{n} {m:.3g} [{lo:.3g}, {hi:.3g}]" for n, m, (lo, hi) in zip(c["parameters"], c["mean"], c["interval90"]))
+        lines.append(f"| {c['effect']} | {par} | {c['gain']:.3g} | {c['se']:.3g} | {c['wins']}/{c['tests']} | "
+                     f"{_fmt_p(c['p'])} | {scale * c['held_out_rmse']:.3g} | {_verdict_of(c, len(cands))} |")
+    lines += [f"| {e} | - | - | - | - | - | - | not testable: no target declares {MODIFIERS[e].covariate} "
+              "(its runs would be the plain model's), not run |" for e in run.selection.untestable]
+    return lines + ["", f"Plain model RMSE over all points: {scale * stats.plain_rmse:.3g} {unit} (nothing fitted: fitted = held out).", ""]
+
+
+def _verdict(run, stats, scale, unit):
+    chosen = run.selection.chosen
+    if not chosen:
+        return ["**No effect chosen**: none beats the plain model on held-out tests consistently enough; "
+                "the model is left unchanged.", ""]
+    plain = f"{scale * stats.plain_rmse:.3g}"
+    return [f"**Effect chosen: {chosen}** ({MODIFIERS[chosen].mechanism}). RMSE in the DEM horizon: "
+            f"{plain} -> {scale * stats.after_rmse:.3g} {unit} on the fitted tests (the effect "
+            f"run at its fitted value), {plain} -> {scale * stats.chosen_row['held_out_rmse']:.3g} {unit} "
+            "held out (each test predicted from the others, by the surrogate).", ""]
+
+
+def _long_term(stats, scale, names, cycles):
+    lines = ["## Long-term horizon (extrapolated, reported apart)", "",
+             "Each ensemble mean over the simulated cycles fitted by Sato's law eps0 + gamma (1 - exp(-alpha "
+             "(N - 1))) + beta (N - 1) and by the shakedown law (beta = 0), extrapolated to the measured points "
+             "beyond them. A run too short to tell hardening from creep is read both ways: creep carried over "
+             "decades of N (Sato) against none (shakedown). Read it as what the DEM horizon implies, not as a "
+             "prediction the DEM made.", "",
+             "| test | points beyond | decades extrapolated | RMSE Sato before / after | RMSE shakedown before / after "
+             "| Sato gamma, alpha, beta (plain) |", "|---|---|---|---|---|---|"]
+    for j, lt in enumerate(stats.long_term):
+        after = stats.long_term_after[j] if stats.long_term_after else None
+        cells = [f"{scale * lt.rmse(law):.3g} / " + (f"{scale * after.rmse(law):.3g}" if after else "-")
+                 for law in LONG_TERM_LAWS]
+        fit = lt.fits["sato"]
+        law = "no fit (did not converge)" if fit is None else ", ".join(f"{x:.3g}" for x in fit.params[1:])
+        decades = f"{np.log10(lt.n.max() / cycles):.1f}" if lt.n.size else "-"
+        lines.append(f"| {names[j]} | {lt.n.size} | {decades} | {cells[0]} | {cells[1]} | {law} |")
+    return lines + [""]

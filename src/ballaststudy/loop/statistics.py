@@ -1,0 +1,142 @@
+"""Everything the loop's outputs compute from a run (outcome.LoopRun); nothing here writes.
+
+Two horizons, never mixed: the DEM horizon (measured points with N <= the simulated
+cycles, compared with the ensembles) and the long-term horizon (points beyond, compared
+with Sato's law fitted to each ensemble mean and extrapolated - an extrapolation, said so)."""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..calibration.bayes import rmse
+from ..inputs import open_netcdf
+from ..measured.importer import load_conditions
+from ..scenario.modifiers import MODIFIERS
+from .accumulation import fit_ensemble, predict
+from .residual import covariate_tests, residual, summary
+
+COVARIATES = ("frequency_Hz", "confining_pressure_kPa", "deviator_max_kPa", "VCI")
+# the plain model's internal signals at its last simulated cycle (mean over the cases)
+SIGNALS = ("breakage_rate", "mean_coordination", "void_ratio", "volumetric_strain")
+LONG_TERM_LAWS = ("sato", "shakedown")
+
+
+@dataclass(frozen=True)
+class LongTerm:
+    """One ensemble's long-term horizon at one test."""
+    n: np.ndarray              # measured N beyond the simulated cycles
+    measured: np.ndarray       # the measured values there
+    predicted: dict            # {law: its extrapolation to n} (NaN where it did not fit)
+    fits: dict                 # {law: accumulation.LawFit, or None: did not converge}
+
+    def rmse(self, law):
+        # no point beyond the DEM horizon: nothing to compare (and no mean of nothing)
+        return rmse(self.measured, self.predicted[law]) if self.n.size else float("nan")
+
+
+@dataclass(frozen=True)
+class LoopStatistics:
+    """Every number the loop's outputs show, computed once (loop_statistics)."""
+    before: list               # per test: conditions, residual summary (plain model), SIGNALS
+    after: list                # the same residual summary of the chosen effect; None: none chosen
+    covariates: list           # residual.covariate_tests of bias and slope on COVARIATES + SIGNALS
+    candidates: list           # per candidate: its parameters, fit, held-out RMSE, evidence, chosen
+    long_term: list            # LongTerm per test, plain model
+    long_term_after: list      # LongTerm per test, chosen effect; None: none chosen
+    plain_rmse: float          # the plain model over every point of the DEM horizon
+
+    @property
+    def chosen_row(self):
+        return next((c for c in self.candidates if c["chosen"]), None)
+
+    @property
+    def after_rmse(self):
+        """The chosen effect's per-test RMSEs pooled, each test alike: their root mean square."""
+        return rmse([r["rmse"] for r in self.after], 0.0)
+
+
+def loop_statistics(run):
+    """LoopStatistics of an outcome.LoopRun."""
+    lp, sel, plain_curves = run.settings, run.selection, run.plain.runs["curves"]
+    before = per_test_rows(run.targets, plain_curves, lp["measurement_sd"])
+    for row, signals in zip(before, model_signals(run.plain.runs["cases"])):
+        row.update(signals)
+    after = per_test_rows(run.targets, sel.after["curves"], lp["measurement_sd"]) if sel.after is not None else None
+    beyond = [points_beyond(path, lp["quantity"], lp["cycles"]) for path in run.targets.measured]
+    return LoopStatistics(
+        before=before, after=after,
+        covariates=[r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)],
+        candidates=candidate_rows(sel, run.targets),
+        long_term=long_term(beyond, run.cycles, plain_curves),
+        long_term_after=long_term(beyond, run.cycles, sel.after["curves"]) if sel.after is not None else None,
+        plain_rmse=rmse(run.targets.y, run.plain.prediction))
+
+
+def describe_test(name, conditions_path):
+    """A test's name, source study and declared covariates (those it gives)."""
+    c = load_conditions(conditions_path)
+    row = dict(test=name, source=c["source"].split(",")[0],
+               **{k: float(c[k]) for k in COVARIATES[:3] if c.get(k) is not None})
+    vci = (c.get("covariates") or {}).get("VCI")
+    if vci:
+        row["VCI"] = float(vci["value"])
+    return row
+
+
+def per_test_rows(targets, curves, measurement_sd):
+    """Per test: describe_test and the residual summary in the DEM horizon of an ensemble
+    (T, K, cycles)."""
+    return [describe_test(name, cond) | summary(residual(n, v, ensemble, measurement_sd))
+            for name, cond, (n, v), ensemble in zip(targets.names, targets.conditions, targets.points, curves)]
+
+
+def model_signals(case_files):
+    """[{signal: mean over the cases at the last cycle}] per test, from a model's cached
+    metrics.nc (case_files: [[path per case] per test]); a failed case's last row."""
+    rows = []
+    for per_test in case_files:
+        values = {s: [] for s in SIGNALS}
+        for path in per_test:
+            ds = open_netcdf(path, "metrics")
+            for s in SIGNALS:
+                if s in ds and ds.sizes.get("cycle", 0):
+                    values[s].append(float(ds[s].values[-1]))
+        rows.append({s: float(np.mean(v)) if v else float("nan") for s, v in values.items()})
+    return rows
+
+
+def points_beyond(path, quantity, cycles):
+    """(N, values) of a measured test beyond the simulated cycles: the long-term horizon."""
+    ds = open_netcdf(path, "measured")
+    n, v = ds["cycle"].values, ds[quantity].values
+    beyond = np.isfinite(v) & (n > cycles)
+    return n[beyond], v[beyond]
+
+
+def long_term(beyond, cycles, curves):
+    """LongTerm per test of an ensemble (T, K, cycles), for Sato's law (hardening + creep)
+    and the shakedown law (no creep): a run too short to tell hardening from creep is read
+    both ways."""
+    out = []
+    for (n, v), ensemble in zip(beyond, curves):
+        preds, fits = {}, {}
+        for law in LONG_TERM_LAWS:
+            try:
+                fits[law] = fit_ensemble(law, cycles, ensemble)
+                preds[law] = predict(fits[law], n)[0]
+            except (RuntimeError, ValueError):     # no convergence (a flat, censored ensemble)
+                fits[law], preds[law] = None, np.full(n.size, np.nan)
+        out.append(LongTerm(n, v, preds, fits))
+    return out
+
+
+def candidate_rows(selection, targets):
+    """Per candidate effect: its parameters, fitted mean and 90 % interval, held-out RMSE,
+    the rule's evidence and whether it was chosen (loop.nc's candidates_json)."""
+    rows = []
+    for name, c in selection.candidates.items():
+        mean, interval, ess = c.fit
+        rows.append(dict(effect=name, parameters=[p.name for p in MODIFIERS[name].parameters],
+                         mean=mean.tolist(), interval90=interval.tolist(), ess=ess,
+                         held_out_rmse=c.held.rmse(targets.y, targets.point_test), chosen=name == selection.chosen,
+                         **selection.evidence[name]))
+    return rows

@@ -1,0 +1,300 @@
+"""Loading the biaxial specimen: the stress sensors and controllers (kit: dem.control),
+isotropic consolidation, a static deviator hold, and cycles of the deviator (quasi-static
+profile or real-time sinusoid) with the records of each cycle; the behaviours per cycle
+from ``ballaststudy.metrics.biaxial``, failure of a specimen that cannot carry p + q_max."""
+from collections import namedtuple
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...dem.control import Control
+from ...metrics.biaxial import compute_biaxial_cycle
+from ...metrics.cycle import MetricsParams
+from ...metrics.strain import specimen_strains
+from ...metrics.void_ratio import SolidCache
+from ..cyclic import CycleState, CyclicRun
+from .params import KPA
+from .specimen import BiaxialRig, place_membrane
+
+AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors (then the segments')
+# controllers: the side servos (two rigid walls, or one per membrane segment), then these
+ControllerIds = namedtuple("ControllerIds", "sides top profile sine segment_sensors")
+
+
+def segment_scales(n_groups, seg_len, t):
+    """Stress per summed x force of each membrane segment, left ones first (compression +:
+    the balls push the left wall towards -x): -+1 / (L t)."""
+    return [(-1.0 if k < n_groups // 2 else 1.0) / (seg_len * t) for k in range(n_groups)]
+
+
+def biaxial_control(rig):
+    """Stress sensors of the moving walls (each side as a whole, and each membrane segment),
+    their positions, and the controllers: the side servos (on while cycling), the top
+    platen's consolidation servo, the profile and the sinusoid. Returns (Control, ids)."""
+    p, lay, t = rig.params, rig.layout, rig.sim.thickness
+    w, h = rig.width(), rig.height()
+    groups = rig.side_groups("left") + rig.side_groups("right")
+    c = Control(every=p.control_every)
+    c.wall_force(lay.top, axis=1, scale=1.0 / (w * t))
+    c.wall_force(lay.left, axis=0, scale=-1.0 / (h * t))
+    c.wall_force(lay.right, axis=0, scale=1.0 / (h * t))
+    c.wall_position(lay.top, axis=1)
+    c.wall_position([g[0] for g in rig.side_groups("left")], axis=0)
+    c.wall_position([g[0] for g in rig.side_groups("right")], axis=0)
+    servo = dict(target=p.confining_pressure_kPa * KPA, gain_unit=KPA,
+                 v_max=p.servo_velocity_m_s, integral_steps=p.servo_integral_steps,
+                 window_steps=p.consolidation_window_steps)
+    if lay.left_groups:           # a servo per membrane segment, on its own stress
+        scales = segment_scales(len(groups), h / len(lay.left_groups), t)
+        sensors = [c.wall_force(g, axis=0, scale=f) for g, f in zip(groups, scales)]
+    else:
+        sensors = [LEFT, RIGHT]
+    sides = [c.servo(sensor, c.walls(g, 0), gain=(-1.0 if k < len(groups) // 2 else 1.0)
+                     * p.servo_gain_m_s_per_kPa, **servo)       # left: +x raises its stress
+             for k, (sensor, g) in enumerate(zip(sensors, groups))]
+    top = c.walls(lay.top, 1)
+    s_top = c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa, **servo)
+    sig3 = p.confining_pressure_kPa * KPA
+    lo, hi = sig3 + p.deviator_min_kPa * KPA, sig3 + p.deviator_max_kPa * KPA
+    profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=p.platen_v_min_m_s,
+                       v_max=p.platen_v_max_m_s, brake=p.braking_fraction, direction=-1,
+                       active=False)
+    sine = c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
+                  gain=p.realtime_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.realtime_velocity_m_s,
+                  integral_steps=p.servo_integral_steps, active=False)
+    ids = ControllerIds(sides, s_top, profile, sine, sensors if lay.left_groups else [])
+    return c.build(), ids
+
+
+CYCLE_FIELDS = {
+    "cycle_end_step": ("1", "engine step at the end of the cycle"),
+    "cycle_steps": ("1", "engine steps in the cycle"),
+    "axial_stress_max": ("Pa", "largest axial stress sigma_1 at the top platen in the cycle (2D: force / (width t))"),
+    "axial_stress_min": ("Pa", "smallest axial stress sigma_1 in the cycle"),
+    "confining_stress_mean": ("Pa", "mean side-wall stress sigma_3 over the cycle (2D: force / (height t))"),
+    "height_at_end": ("m", "specimen height between the platens at the end of the cycle"),
+    "width_at_end": ("m", "mean specimen width between the sides (area / height) at the end of the cycle"),
+    "width_max_at_end": ("m", "largest width between the sides (the membrane's bulge) at the end of the cycle"),
+    "elements_broken_tension": ("1", "flat-joint elements broken in tension since loading began"),
+    "elements_broken_shear": ("1", "flat-joint elements broken in shear since loading began"),
+}
+
+
+@dataclass
+class BiaxialState(CycleState):
+    phase: str = "consolidation"
+    windows: int = 0
+    loading_start_step: int = -1      # end of consolidation
+    height0: float = float("nan")     # H0, W0: at the end of consolidation
+    width0: float = float("nan")
+    window_means: list = field(default_factory=list)    # stress window means (axial, left, right)
+    failure: str = ""                 # why the specimen failed ("" = it did not)
+    peak_stress: float = 0.0          # sigma_1's largest recent mean in this loading, its strain
+    peak_strain: float = 0.0
+
+
+class BiaxialRun(CyclicRun):
+    """Consolidation, then cycles of the deviator (quasi-static or real-time); per cycle
+    the records above and the behaviours (``metrics.biaxial.compute_biaxial_cycle``)."""
+    CHANNELS = {"axial_stress": AXIAL, "left_stress": LEFT, "right_stress": RIGHT,
+                "platen_y": HEIGHT, "left_x": X_LEFT, "right_x": X_RIGHT}
+    CYCLE_FIELDS = CYCLE_FIELDS
+    CYCLING = ("loading", "cyclic")     # the first loading is cycle 0
+    State = BiaxialState
+
+    def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
+                 resumed=False):
+        p = rig.params
+        control, self.ids = biaxial_control(rig)
+        super().__init__(rig, cycles, control, checkpoint,
+                         checkpoint_every or p.checkpoint_every, metrics, p.max_cycle_steps)
+        self._metrics_setup()
+        if p.mode not in ("quasi_static", "real_time"):
+            raise ValueError(f"loading mode {p.mode!r}: quasi_static or real_time")
+        if p.mode == "quasi_static" and p.loading_dt_factor > 1.0 and not resumed:
+            rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
+
+    def _metrics_setup(self):
+        """The ``metrics:`` settings (again after a resume: the checkpoint's) and the stone
+        solids reused between cycles (emptied at every checkpoint cycle, so that a resumed
+        run computes what an uninterrupted one does)."""
+        self.metrics_params = MetricsParams.from_config(self.s.metrics_cfg)
+        self.solid_cache = SolidCache(self.metrics_params.solid_reuse_tolerance)
+
+    def _rescale(self):
+        """Stress sensors follow the specimen's current size."""
+        c, t = self.control, self.rig.sim.thickness
+        w, h = self.rig.width(), self.rig.height()
+        c.set_scale(AXIAL, 1.0 / (w * t))
+        c.set_scale(LEFT, -1.0 / (h * t))
+        c.set_scale(RIGHT, 1.0 / (h * t))
+
+    # --------------------------------------------------------------- events
+    def advance(self, max_steps=None):
+        """A membrane follows the platens (segment heights, their stress sensors) before
+        every run of the engine (at least every control buffer: well below a mm of platen
+        travel); before, not after, so a resumed run does what an uninterrupted one does."""
+        sensors = self.ids.segment_sensors
+        if sensors:
+            scales = segment_scales(len(sensors), place_membrane(self.rig), self.rig.sim.thickness)
+            for sensor, f in zip(sensors, scales):
+                self.control.set_scale(sensor, f)
+        super().advance(max_steps)
+
+    def on_window(self, controller):
+        p, s, c = self.rig.params, self.s, self.control
+        means = c.window_means()
+        self._rescale()
+        if s.phase not in ("consolidation", "hold"):
+            return
+        s.windows += 1
+        sig = means[[AXIAL, LEFT, RIGHT]]
+        s.window_means.append([float(v) for v in sig])
+        p3 = p.confining_pressure_kPa * KPA
+        target = np.array([c.get(self.ids.top, "target"), p3, p3])
+        if np.all(np.abs(sig - target) / target < p.consolidation_tolerance):
+            s.windows = 0
+            if s.phase == "hold":
+                s.phase = "held"
+                return
+            s.phase = "loading"
+            s.loading_start_step = self.rig.sim.step
+            self._start_cycle()                 # the first loading is load cycle N = 1
+            s.height0, s.width0 = self.rig.height(), self.rig.width()
+            for k in self.ids.sides:        # keep p; no more windows
+                c.set(k, window_steps=np.inf)
+            c.set(self.ids.top, active=False)
+            if p.mode == "real_time":       # the sinusoid starts at p + q_min now
+                c.set(self.ids.sine, active=True, t0=self.rig.sim.time, half_periods=0,
+                      integral=0.0)
+            else:
+                c.set(self.ids.profile, active=True, direction=-1)
+        elif s.windows >= p.consolidation_max_windows:
+            raise RuntimeError(f"{s.phase} at {', '.join(f'{v / KPA:g}' for v in target)} kPa "
+                               f"not reached within {s.windows} windows (last means "
+                               f"{', '.join(f'{v / KPA:.2f}' for v in sig)} kPa)")
+
+    def hold(self, q_kPa):
+        """A static deviator stage (after consolidation, instead of cycling): the top servo
+        holds p + q, the side ones p, until the window means of all three are within the
+        tolerance. Returns those means (axial, left, right) [Pa]."""
+        p, s, c = self.rig.params, self.s, self.control
+        while s.phase == "consolidation":
+            self.advance()
+        c.set(self.ids.profile, active=False)
+        c.set(self.ids.sine, active=False)
+        c.set(self.ids.top, active=True, integral=0.0,
+              target=(p.confining_pressure_kPa + q_kPa) * KPA)
+        for k in (*self.ids.sides, self.ids.top):
+            c.set(k, window_steps=p.consolidation_window_steps)
+        c.reset_window()
+        s.phase, s.windows = "hold", 0
+        while s.phase == "hold":
+            self.advance()
+        return np.array(s.window_means[-1])
+
+    def on_peak(self):
+        self._rescale()
+
+    def check_stalled(self):
+        """A stress-controlled specimen that cannot carry sigma_1 = p + q_max fails, as in the
+        laboratory: its axial strain runs away. The run ends as a result, not an error, when
+        the axial strain reaches failure_axial_strain, or sigma_1 (mean of the last 50
+        samples) passed a peak below the bound and the specimen went on straining by
+        softening_strain (the peak strength of a strain-controlled test), or a loading to
+        p + q_max does not end within max_cycle_steps; ``failure`` says which, where and at
+        what stress."""
+        s, p = self.s, self.rig.params
+        if s.phase not in ("loading", "cyclic"):
+            return super().check_stalled()
+        ea, sig1 = self.strains()[0], float(np.mean(self.samples["axial_stress"][-50:]))
+        if sig1 > s.peak_stress:
+            s.peak_stress, s.peak_strain = sig1, ea
+        steps = self.rig.sim.step - (s.loading_start_step if s.phase == "loading" else s.cycle_start_step)
+        if ea >= p.failure_axial_strain:
+            why = f"axial strain {ea:.3f} reached failure_axial_strain {p.failure_axial_strain:g}"
+        elif ea - s.peak_strain >= p.softening_strain and s.peak_sample < 0:
+            why = (f"sigma_1 peaked at {s.peak_stress / KPA:.1f} kPa (axial strain {s.peak_strain:.4f}) "
+                   f"and fell below it over a further softening_strain {p.softening_strain:g}")
+        elif steps > p.max_cycle_steps:
+            why = (f"sigma_1 did not reach p + q_max = {p.confining_pressure_kPa + p.deviator_max_kPa:g} "
+                   f"kPa within max_cycle_steps {p.max_cycle_steps} (axial strain {ea:.4f})")
+        else:
+            return
+        where = "in the first loading" if s.phase == "loading" else f"in cycle {s.cycle}"
+        s.failure = (f"the specimen failed {where}: {why}; sigma_1 "
+                     f"{self.control.reading(AXIAL) / KPA:.1f} kPa at that moment")
+        s.phase = "done"
+
+    def _trough(self):
+        """The first trough after consolidation ends cycle 0 (N = 1 of a laboratory test: the
+        first loading from p to p + q_max and the unloading to p + q_min)."""
+        self._rescale()
+        self.s.peak_stress = 0.0        # each loading branch is watched for softening anew
+        if self.s.phase == "loading":
+            self.s.phase = "cyclic"
+        super()._trough()
+
+    def strains(self):
+        """(axial, volumetric) strain since the end of consolidation, compression +."""
+        s = self.s
+        return specimen_strains(self.rig.height(), self.rig.width(), s.height0, s.width0)
+
+    # --------------------------------------------------------------- records
+    def cycle_row(self):
+        rig, s = self.rig, self.s
+        modes = rig.sim.breakages()["mode"][s.log0:]
+        sig1 = self.cycle_samples("axial_stress")
+        sig3 = 0.5 * (self.cycle_samples("left_stress") + self.cycle_samples("right_stress"))
+        return dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
+                    axial_stress_max=float(sig1.max()), axial_stress_min=float(sig1.min()),
+                    confining_stress_mean=float(sig3.mean()), height_at_end=rig.height(),
+                    width_at_end=rig.width(),
+                    width_max_at_end=float(np.max(rig.side_x("right") - rig.side_x("left"))),
+                    elements_broken_tension=int(np.sum(modes == "tension")),
+                    elements_broken_shear=int(np.sum(modes == "shear")))
+
+    def on_cycle_end(self):
+        if self.s.cycle % self.checkpoint_every == 0:
+            self.solid_cache.clear()
+
+    def _thin_samples(self, k0, every=None):
+        super()._thin_samples(k0, max(1, int(self.rig.params.timeseries_every)))
+
+    # --------------------------------------------------------------- behaviours
+    def snapshot(self):
+        """The end-of-cycle snapshot ``metrics.biaxial.compute_biaxial_cycle`` reads (the
+        engine's arrays as they are: the compute only reads them)."""
+        rig, s = self.rig, self.s
+        sim, lay = rig.sim, rig.layout
+        b, bd = sim.balls, sim.bonds
+        stone = np.zeros(len(b), bool)
+        stone[rig.stone_balls()] = True
+        i, j, fn = rig.ball_contacts()
+        seg = sim.walls.seg
+        br = sim.breakages()
+        return dict(
+            pos=b.pos, rad=b.rad, ballast=stone,
+            bond_i=bd.i, bond_j=bd.j, bond_intact=sim.intact_bonds(),
+            contact_i=i, contact_j=j, contact_fn=fn,
+            geometry=dict(x_left=rig.side_x("left").mean(), x_right=rig.side_x("right").mean(),
+                          y_bottom=float(seg[lay.bottom[0], 1]), y_top=float(seg[lay.top[0], 1])),
+            height=rig.height(), width=rig.width(), height0=s.height0, width0=s.width0,
+            break_step=br["step"][s.log0:],
+            break_mode=np.where(br["mode"][s.log0:] == "tension", 1, 2),
+            n_bonds_installed=s.n_bonds0, n_elements_per_bond=int(bd.state.shape[1]),
+            cycle_start_step=s.cycle_start_step, cycle_end_step=sim.step + 1)
+
+    def behaviours(self):
+        """Strains, breakage (eqs. 4.6-4.8), fragments, mean coordination and void ratio of
+        the specimen rectangle between the walls (``ballaststudy.metrics``)."""
+        return compute_biaxial_cycle(self.snapshot(), self.metrics_params, self.solid_cache)
+
+    # --------------------------------------------------------------- checkpoint
+    def _load_extra(self, d):
+        self._metrics_setup()
+
+    @classmethod
+    def from_checkpoint(cls, path, cycles=None, checkpoint_every=None):
+        return super().from_checkpoint(path, BiaxialRig, cycles=cycles,
+                                       checkpoint_every=checkpoint_every)

@@ -1,0 +1,59 @@
+"""Biaxial-rig parameters: the ``rig: biaxial:`` section of the config (``assembly``: the
+specimen; ``loading``: consolidation and cycling), flat as the rig code reads them
+(``params.width_m``). SI units unless the key names one."""
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+from ..deposition import DepositionParams
+
+KPA = 1.0e3
+
+
+@dataclass
+class BiaxialParams(DepositionParams):
+    RIG: ClassVar[str] = "biaxial"
+    # specimen (assembly)
+    width_m: float = 0.30              # 2D slice of the 300 mm x 600 mm triaxial cylinder
+    height_m: float = 0.60
+    membrane_friction: float = 0.0     # side walls stand for the membrane: frictionless
+    membrane_segments: int = 1         # 1: rigid side walls; n > 1: a membrane of n segments a side
+    relax_steps: int = 5000
+    # loading
+    confining_pressure_kPa: float = 30.0
+    deviator_min_kPa: float = 15.0
+    deviator_max_kPa: float = 230.0
+    servo_gain_m_s_per_kPa: float = 2.0e-4
+    servo_velocity_m_s: float = 0.01
+    servo_integral_steps: int = 5000
+    consolidation_window_steps: int = 5000
+    consolidation_tolerance: float = 0.02
+    consolidation_max_windows: int = 200
+    mode: str = "quasi_static"         # or "real_time": true masses, sinusoidal q at f
+    frequency_Hz: float = 20.0
+    realtime_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo in real-time mode
+    realtime_velocity_m_s: float = 0.05
+    platen_v_max_m_s: float = 0.005
+    platen_v_min_m_s: float = 0.0005
+    braking_fraction: float = 0.25
+    failure_axial_strain: float = 0.15   # a stress-controlled specimen beyond this has failed
+    softening_strain: float = 0.02       # ... or once sigma_1 fell past its peak over this strain
+    cycles: int = 100
+    control_every: int = 10
+    loading_dt_factor: float = 2.0
+    checkpoint_every: int = 50
+    timeseries_every: int = 10
+    vtk_cycles: list = field(default_factory=lambda: [0, -1])
+    max_cycle_steps: int = 5000000
+
+    def take_conditions(self, c):
+        """A measured test's loading conditions (``measured.importer.load_conditions``):
+        p, the q bounds, f."""
+        self.confining_pressure_kPa = c["confining_pressure_kPa"]
+        self.deviator_max_kPa = c["deviator_max_kPa"]
+        if c.get("deviator_min_kPa") is not None:
+            self.deviator_min_kPa = c["deviator_min_kPa"]
+        if c.get("frequency_Hz") is not None:
+            self.frequency_Hz = c["frequency_Hz"]
+        if not self.deviator_min_kPa < self.deviator_max_kPa:
+            raise ValueError(f"deviator {self.deviator_min_kPa:g}-{self.deviator_max_kPa:g} kPa: "
+                             "the minimum must be below the maximum")

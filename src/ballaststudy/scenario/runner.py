@@ -1,0 +1,100 @@
+"""The one runner: (scenario, specimen k) -> a metrics file. A fresh case loads its assembled
+specimen, takes the scenario's rig parameters, applies its modifiers in order (and the
+chaos probe's perturbation), then runs the cycles; a case with a checkpoint beside its
+output resumes from it (the modifiers' effects live in the checkpointed state, only their
+end-of-cycle hooks are attached again). ``run_cases`` runs many in parallel processes and
+skips finished ones, so an interrupted calibration or loop resumes."""
+import json
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+from tqdm import tqdm
+
+from ..inputs import open_netcdf
+from ..rig.kinds import kind_of, rig_classes
+from .modifiers import MODIFIERS
+
+
+def cached_case(root, scenario, k):
+    """Where the runner keeps case ``k`` of a scenario under a cache folder: <key>/case<k>.nc."""
+    return Path(root) / scenario.key / f"case{k}.nc"
+
+
+def checkpoint_of(out):
+    return Path(out).with_name(Path(out).stem + ".checkpoint.npz")
+
+
+def _hooks(scenario):
+    return [h for name, values in scenario.modifier_values() for h in MODIFIERS[name].hooks(values)]
+
+
+def fresh_run(scenario, k, checkpoint, checkpoint_every=None):
+    """The run of case ``k`` from its assembled specimen, the modifiers applied."""
+    assembled = open_netcdf(scenario.specimens[k], "assembled")
+    if kind_of(assembled) != scenario.kind:
+        raise ValueError(f"{scenario.specimens[k]}: a {kind_of(assembled)} specimen in a {scenario.kind} scenario")
+    rig_class, run_class, _ = rig_classes(scenario.kind)
+    rig = rig_class.from_dataset(assembled, "engine_checkpoint")
+    rig.params = scenario.rig
+    for name, values in scenario.modifier_values():
+        MODIFIERS[name].apply(rig, values, scenario.covariates)
+    if scenario.perturbation_m_s:       # the chaos probe (loop.select)
+        rig.sim.perturb_velocities(scenario.perturbation_m_s, scenario.perturbation_seed + k)
+    return run_class(rig, scenario.cycles, checkpoint=checkpoint, checkpoint_every=checkpoint_every,
+                     metrics=scenario.metrics)
+
+
+def prepared_run(scenario, k, out, checkpoint_every=None, restart=False):
+    """(run, resumed): case ``k`` resumed from the checkpoint beside ``out`` (unless
+    ``restart``) or fresh, with the modifiers' end-of-cycle hooks attached."""
+    ckpt = checkpoint_of(out)
+    resumed = ckpt.is_file() and not restart
+    if resumed:
+        run_class = rig_classes(scenario.kind)[1]
+        run = run_class.from_checkpoint(ckpt, cycles=scenario.cycles, checkpoint_every=checkpoint_every)
+    else:
+        run = fresh_run(scenario, k, ckpt, checkpoint_every)
+    run.hooks += _hooks(scenario)
+    return run, resumed
+
+
+def write_case(run, scenario, k, out, figures=False, attrs=None):
+    """The metrics file of a finished run, saying what made it."""
+    write_outputs = rig_classes(scenario.kind)[2]
+    write_outputs(run, out, figures=figures, attrs={
+        "assembled_file": scenario.specimens[k],
+        **({"measured_conditions_file": scenario.conditions_file} if scenario.conditions_file else {}),
+        "scenario_key": scenario.key,
+        "modifiers_json": json.dumps(scenario.modifier_values()),
+        "material_parameters_json": json.dumps(scenario.material_values()),     # {}: Table 4.2's
+        **(attrs or {})})
+
+
+def run_case(scenario, k, out):
+    """Case ``k`` of ``scenario`` into ``out`` (resuming; a finished one is kept). Returns out."""
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    out = Path(out)
+    if out.is_file():
+        return str(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    run, _ = prepared_run(scenario, k, out)
+    run.run()
+    write_case(run, scenario, k, out)
+    checkpoint_of(out).unlink(missing_ok=True)
+    return str(out)
+
+
+def run_cases(cases, jobs=1, progress=False, desc="cases"):
+    """Every (scenario, k, out) in ``cases``, ``jobs`` processes at a time."""
+    bar = tqdm(total=len(cases), desc=desc, unit="case", disable=not progress)
+    if jobs > 1 and len(cases) > 1:
+        with ProcessPoolExecutor(jobs) as pool:
+            for done in as_completed([pool.submit(run_case, *c) for c in cases]):
+                done.result()
+                bar.update()
+    else:
+        for c in cases:
+            run_case(*c)
+            bar.update()
+    bar.close()

@@ -1,0 +1,154 @@
+"""A scenario: one model evaluation, frozen and typed - K assembled specimens of one rig kind
+loaded under a test's conditions (already in the rig's parameters) with a list of modifiers
+and their values, for a number of cycles. Everything above the rig floor (measured_sim,
+calibration, the parametric study, the loop) describes what it wants as scenarios and reads
+their metrics files; the runner (runner.py) turns (scenario, specimen) into one.
+
+Its ``key`` is the cache key of its cases: a hash of everything that decides them - the
+specimens' content (sha-256 of their files, not their names: specimens re-assembled under
+the same names must not reuse old cases), the rig's parameters, the modifiers in the order
+they are applied with their values (12 significant digits), the covariates a modifier may
+read, the cycles, the metrics settings and a chaos probe's perturbation when there is one.
+File names and the conditions file are labels, not part of the key."""
+import hashlib
+import json
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from ..provenance.record import sha256_file
+from ..rig.kinds import RUNS_TESTS, params_class, params_from_config
+from ..schema import ConfigError
+from .modifiers import MODIFIERS
+
+
+@lru_cache(maxsize=4096)
+def _file_hash(path, mtime_ns, size):
+    return sha256_file(path)
+
+
+def content_hash(path):
+    """sha-256 of a file's bytes (read once per process while its mtime and size stay)."""
+    st = Path(path).stat()
+    return _file_hash(str(path), st.st_mtime_ns, st.st_size)
+
+
+def _canonical(obj):
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"))
+
+
+def _rounded(values):
+    return {k: float(f"{float(v):.12g}") for k, v in sorted(values.items())}
+
+
+@dataclass(frozen=True)
+class Scenario:
+    kind: str                       # rig kind (rig.kinds.KINDS)
+    specimens: tuple                # paths of the K assembled specimens
+    specimen_hashes: tuple          # their content (content_hash): what the key sees
+    rig_json: str                   # the rig's parameters, the test's conditions applied
+    cycles: int
+    modifiers: tuple = ()           # ((name, ((parameter, value), ...)), ...), applied in order
+    covariates_json: str = "{}"     # the test's declared covariates (a modifier may read one)
+    metrics_json: str = "null"      # the config's metrics section
+    conditions_file: str = ""       # the measured test's conditions YAML (a label)
+    perturbation_m_s: float = 0.0   # > 0: the chaos probe's velocity perturbation
+    perturbation_seed: int = 0      # its seed (+ the specimen's index)
+
+    @property
+    def rig(self):
+        """The rig's parameters (a fresh params object)."""
+        return params_class(self.kind)(**json.loads(self.rig_json))
+
+    @property
+    def covariates(self):
+        return json.loads(self.covariates_json)
+
+    @property
+    def metrics(self):
+        return json.loads(self.metrics_json)
+
+    def modifier_values(self):
+        """[(name, {parameter: value})] in the order they are applied."""
+        return [(name, dict(values)) for name, values in self.modifiers]
+
+    def material_values(self):
+        """{name: value} of its material modifiers (Table 4.2's parameters it changes)."""
+        return {k: v for name, values in self.modifiers if MODIFIERS[name].role == "material"
+                for k, v in values}
+
+    @property
+    def key(self):
+        probe = ({"perturbation_m_s": self.perturbation_m_s, "perturbation_seed": self.perturbation_seed}
+                 if self.perturbation_m_s else {})
+        text = _canonical({"kind": self.kind, "specimens": list(self.specimen_hashes),
+                           "rig": json.loads(self.rig_json), "cycles": self.cycles,
+                           "modifiers": [[n, _rounded(dict(v))] for n, v in self.modifiers],
+                           "covariates": self.covariates, "metrics": self.metrics, **probe})
+        return hashlib.sha1(text.encode()).hexdigest()[:12]
+
+
+def conditioned_rig(kind, rig_config, conditions=None, mode=None, conditions_file="conditions"):
+    """The kind's parameters from the config's ``rig`` section with a measured test's
+    conditions (``measured.importer.load_conditions`` of ``conditions_file``) and a biaxial
+    loading mode applied. ConfigError naming the conditions file if the test is not one the
+    kind runs or its bounds clash with the config's."""
+    params = params_from_config(kind, rig_config or {})
+    if conditions is not None:
+        if conditions["rig"] not in RUNS_TESTS[kind]:
+            raise ConfigError(conditions_file, "rig", f"{conditions['rig']}: a {kind} case runs "
+                              f"{' or '.join(RUNS_TESTS[kind])} conditions")
+        try:
+            params.take_conditions(conditions)
+        except ValueError as err:     # a bound of the test against the config's other bound
+            raise ConfigError(conditions_file, None, str(err)) from None
+    if mode:
+        params.mode = mode      # biaxial only: the caller checks
+    return params
+
+
+def _shifted(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float, list)):
+        return value
+    if isinstance(value, list):
+        return [_shifted(v) for v in value]
+    return type(value)(value * 1.37 + 1)
+
+
+def conditioned_keys(kind, conditions_list):
+    """The rig parameters every test of ``conditions_list`` sets whatever the config says
+    (take_conditions): a stage run under these tests ignores the config's values, so they
+    are no rerun trigger of it. Found by applying each test's conditions to the defaults
+    and to every number shifted: a key that ends equal was set by the test (a key scaled by
+    it, like the box rig's preloads, still depends on the config and stays)."""
+    cls = params_class(kind)
+    base = cls().to_dict()
+    kept = set(base)
+    for c in conditions_list:
+        a, b = cls(**base), cls(**{k: _shifted(v) for k, v in base.items()})
+        try:
+            a.take_conditions(c)
+            b.take_conditions(c)
+        except ValueError:          # a shifted bound against the test's: decide nothing
+            return ()
+        da, db = a.to_dict(), b.to_dict()
+        kept &= {k for k in base if da[k] == db[k] and base[k] != _shifted(base[k])}
+    return tuple(sorted(kept)) if conditions_list else ()
+
+
+def scenario(kind, specimens, rig, cycles, modifiers=(), conditions=None, conditions_file="",
+             metrics=None, perturbation_m_s=0.0, perturbation_seed=0):
+    """A Scenario from plain values: ``rig`` a params object (conditioned_rig), ``modifiers``
+    [(name, {parameter: value})] checked against the registry, ``conditions`` the loaded
+    test (its covariates are kept)."""
+    for name, values in modifiers:
+        MODIFIERS[name].check(values)
+    specimens = tuple(str(s) for s in specimens)
+    return Scenario(
+        kind=kind, specimens=specimens, specimen_hashes=tuple(content_hash(s) for s in specimens),
+        rig_json=_canonical(rig.to_dict()), cycles=int(cycles),
+        modifiers=tuple((name, tuple(sorted((k, float(v)) for k, v in values.items())))
+                        for name, values in modifiers),
+        covariates_json=_canonical((conditions or {}).get("covariates") or {}),
+        metrics_json=_canonical(metrics), conditions_file=str(conditions_file or ""),
+        perturbation_m_s=float(perturbation_m_s), perturbation_seed=int(perturbation_seed))

@@ -1,0 +1,104 @@
+"""The loop's outputs from typed bundles (outcome.LoopRun, statistics.LoopStatistics), no
+DEM run and no command line: the per-point order, the long-term horizon when a law cannot
+be fitted, the pooled RMSE, the verdict rule, and loop.nc, chosen.yaml, report.md and
+curves.png of a hand-made run with one effect chosen. The end-to-end loop is test_cli.py's."""
+import warnings
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from ballaststudy.calibration.bayes import rmse
+from ballaststudy.loop.cli import Candidate
+from ballaststudy.loop.dataset import loop_dataset
+from ballaststudy.loop.markdown import _verdict_of, report_markdown
+from ballaststudy.loop.outcome import LoopRun, PlainModel, Selection, Targets
+from ballaststudy.loop.plots import plot_curves
+from ballaststudy.loop.report import chosen_doc
+from ballaststudy.loop.select import ALPHA, HeldOut
+from ballaststudy.loop.statistics import LongTerm, LoopStatistics, candidate_rows, long_term
+
+SETTINGS = dict(quantity="axial_strain", cycles=3, cases=2, design_sets=2, refine_rounds=0, refine_sets=2,
+                specimen_share=1.0, measurement_sd=1e-4)
+TARGETS = Targets(["conditions/a.yaml", "conditions/b.yaml"], ["a.nc", "b.nc"],
+              [(np.array([1.0, 2.0, 3.0]), np.array([0.001, 0.002, 0.0025])), (np.array([1.0, 3.0]), np.array([0.001, 0.003]))])
+
+
+def test_points_one_after_the_other():
+    assert TARGETS.names == ["a", "b"]
+    np.testing.assert_array_equal(TARGETS.point_test, [0, 0, 0, 1, 1])
+    np.testing.assert_array_equal(TARGETS.point_cycle, [1, 2, 3, 1, 3])
+    np.testing.assert_array_equal(TARGETS.y, [0.001, 0.002, 0.0025, 0.001, 0.003])
+
+
+def test_long_term_without_a_fit_or_a_point_beyond():
+    """One case cannot be fitted (no scatter to weight by): no fit, NaN extrapolations, and a
+    test with no point beyond the DEM horizon has a NaN RMSE, without a warning."""
+    curves = np.array([[[0.001, 0.002, 0.0025]], [[0.001, 0.002, 0.003]]])       # (T, K = 1, cycles)
+    beyond = [(np.array([30.0, 500.0]), np.array([0.004, 0.005])), (np.zeros(0), np.zeros(0))]
+    out = long_term(beyond, np.arange(1.0, 4.0), curves)
+    assert out[0].fits == {"sato": None, "shakedown": None} and np.isnan(out[0].predicted["sato"]).all()
+    assert out[0].predicted["sato"].shape == (2,)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.isnan(out[1].rmse("sato"))
+
+
+def test_the_verdict_follows_the_rule():
+    row = dict(chosen=False, p=ALPHA / 2 - 1e-3, gain=3.0)
+    assert _verdict_of(row, 2) == "passes, smaller gain"
+    assert _verdict_of(row | dict(gain=-1.0), 2) == "rejected: no gain"
+    assert _verdict_of(row | dict(p=ALPHA / 2), 2) == "rejected: gain not consistent across tests"
+    assert _verdict_of(row | dict(chosen=True), 2) == "chosen"
+
+
+def _chosen_run():
+    """A run of K = 2 cases, 3 cycles, two tests, the end_restraint effect chosen."""
+    rng = np.random.default_rng(0)
+    plain = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=[[], []])
+    after = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)))
+    design = [dict(curves=rng.random((2, 2, 3))) for _ in range(2)]
+    held = HeldOut(np.array([1.0, 2.0]), TARGETS.y + 1e-4, np.zeros((2, 1)))
+    candidate = Candidate(np.array([[0.0], [1.2]]), [], held, (np.array([0.3]), np.array([[0.2, 0.4]]), 100.0),
+                          SimpleNamespace(sets=design + [after]))
+    evidence = dict(gain=5.0, se=1.0, z=5.0, wins=2, tests=2, p=0.01)
+    selection = Selection({"end_restraint": candidate}, {"end_restraint": evidence}, "end_restraint", after, ["fouling"])
+    plain_model = PlainModel(plain, TARGETS.y + 2e-4, HeldOut(np.array([0.5, 1.5]), TARGETS.y + 2e-4, np.zeros((2, 0))))
+    run = LoopRun(SETTINGS, TARGETS, plain_model, selection, {}, minutes=0.5)
+    rows = [dict(test=name, source="planted", points=3, rmse=2e-4 * (j + 1), bias=1e-4, bias_p=0.5, slope_ln_n=0.0,
+                 slope_p=np.nan) for j, name in enumerate(TARGETS.names)]
+    no_fit = LongTerm(np.zeros(0), np.zeros(0), {"sato": np.zeros(0), "shakedown": np.zeros(0)},
+                      {"sato": None, "shakedown": None})
+    stats = LoopStatistics(rows, [r | dict(rmse=1e-4) for r in rows], [], candidate_rows(selection, TARGETS),
+                           [no_fit] * 2, [no_fit] * 2, rmse(TARGETS.y, plain_model.prediction))
+    return run, stats
+
+
+def test_a_chosen_effect_in_every_output(tmp_path):
+    run, stats = _chosen_run()
+    assert run.dem_cases == 2 * 2 * (1 + 3)                     # plain + 2 design sets + the fitted run
+    assert stats.after_rmse == pytest.approx(1e-4) and stats.chosen_row["effect"] == "end_restraint"
+    assert stats.candidates[0]["held_out_rmse"] == pytest.approx(1e-4)
+    assert chosen_doc(stats, {}) == {"effect": "end_restraint", "parameters": {"platen_friction": 0.3},
+                                     "interval90": {"platen_friction": [0.2, 0.4]}, "material_parameters": "table_4_2"}
+    ds = loop_dataset(run, stats)
+    assert ds["candidate"].shape == (1, 2, 2, 2, 3) and "after" in ds and "plain_probe" not in ds
+    assert list(ds["effect_parameter"].values[0]) == ["platen_friction"] and ds.attrs["chosen"] == "end_restraint"
+    assert ds.attrs["untestable_effects"] == "fouling" and ds["cycle"].values.tolist() == [1.0, 2.0, 3.0]
+    text = report_markdown(run, stats)
+    assert "16 DEM cases (0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
+    assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] |" in text
+    assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text
+    plot_curves(tmp_path / "curves.png", run, stats)
+    assert (tmp_path / "curves.png").stat().st_size > 1000
+
+
+def test_no_effect_chosen():
+    run, stats = _chosen_run()
+    run = LoopRun(run.settings, run.targets, run.plain, Selection(run.selection.candidates, run.selection.evidence),
+                  run.base, run.minutes)
+    stats = LoopStatistics(stats.before, None, [], candidate_rows(run.selection, TARGETS), stats.long_term, None,
+                           stats.plain_rmse)
+    assert chosen_doc(stats, {"mu": 0.5}) == {"effect": "none", "parameters": {}, "interval90": {},
+                                              "material_parameters": {"mu": 0.5}}
+    assert "after" not in loop_dataset(run, stats) and "**No effect chosen**" in report_markdown(run, stats)

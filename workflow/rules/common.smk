@@ -1,0 +1,47 @@
+# Helpers shared by the rule files (the Snakemake workflow template's common.smk).
+import json
+from pathlib import Path
+
+from ballaststudy.measured.importer import load_conditions
+from ballaststudy.scenario.scenario import conditioned_keys as _conditioned_keys
+
+
+def section(dotted):
+    """The config's section at a dotted path ("rig.biaxial.loading"), {} where absent."""
+    node = config
+    for part in dotted.split("."):
+        node = (node or {}).get(part) or {}
+    return node
+
+
+def trigger(*dotted, drop=()):
+    """A rule's rerun trigger: the JSON of config sections (Snakemake reruns a job whose
+    params changed), keys in ``drop`` left out - the keys the stage overrides, whose edits
+    must rerun nothing. One section: its JSON as it is; several: {path: section}."""
+    parts = {d: {k: v for k, v in section(d).items() if k not in drop} if isinstance(section(d), dict)
+             else section(d) for d in dotted}
+    return json.dumps(parts[dotted[0]] if len(dotted) == 1 else parts, sort_keys=True)
+
+
+def conditioned_keys(kind, tests):
+    """The rig parameters every measured test of ``tests`` (names under measured.tests_dir)
+    sets itself: edited in the config, they change nothing the stage runs. Tests that are
+    not there (no measured tests: the stage cannot run) decide nothing."""
+    tests_dir = Path(config["measured"]["tests_dir"])
+    return _conditioned_keys(kind, [load_conditions(tests_dir / f"{t}.yaml") for t in tests
+                                    if (tests_dir / f"{t}.yaml").is_file()])
+
+
+SPECIMENS = config.get("specimens") or {}
+
+
+def specimen_files(stage):
+    """The assembled specimens a stage (its dotted section, with ``specimens`` and ``cases``)
+    runs: the first ``cases`` of its set - a biaxial set's under results/specimens/<set>/
+    (rule specimen_assemble), a box set's the study's assembled cases of its database."""
+    sec = section(stage)
+    name = sec["specimens"]
+    s = SPECIMENS[name]
+    if s["rig"] == "box":
+        return [f"{RESULTS}/cases/{s['database']}/case{k}/assembled.nc" for k in range(sec["cases"])]
+    return [f"{RESULTS}/specimens/{name}/case{k}.nc" for k in range(sec["cases"])]
