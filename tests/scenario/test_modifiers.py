@@ -4,6 +4,7 @@ means what the report says it means.
 
 fouling        stone-stone friction times (1 - loss VCI / 100), walls untouched; no VCI: no change
 end_restraint  stone-platen friction = the value, stone-stone and membrane untouched
+membrane_friction  stone-membrane friction = the value, stone-stone and platens untouched
 rate           real-time mode, no local damping, the stone dashpot; a cycle lasts 1/f in
                simulated time (20 and 40 Hz: ratio 2)
 abrasion       the strong network (normal force above the stone-stone mean) recomputed here;
@@ -99,6 +100,18 @@ def test_end_restraint_sets_stone_platen_friction_only(setup):
     mu = rig.sim.contact_coefficient(MU)
     expected = mu0.copy()
     expected[:2, PLATEN] = expected[PLATEN, :2] = 0.25
+    assert np.array_equal(mu, expected)
+
+
+def test_membrane_friction_sets_stone_membrane_friction_only(setup):
+    cond = load_conditions(_conditions(setup[2]))
+    rig = _rig(setup, cond)
+    mu0 = rig.sim.contact_coefficient(MU)
+    assert not np.any(mu0[:2, MEMBRANE] == 0.35)
+    MODIFIERS["membrane_friction"].apply(rig, {"membrane_friction": 0.35}, cond.get("covariates"))
+    mu = rig.sim.contact_coefficient(MU)
+    expected = mu0.copy()
+    expected[:2, MEMBRANE] = expected[MEMBRANE, :2] = 0.35
     assert np.array_equal(mu, expected)
 
 
