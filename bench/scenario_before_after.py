@@ -51,9 +51,9 @@ def small_config(src):
     if "specimens" in cfg:                  # one definition of a specimen set
         cfg["specimens"] = {"small_biaxial": dict(rig="biaxial", **small),
                             "box_cases": dict(rig="box", database="box_test", cases=2)}
-        cfg["measured"]["sim"].update(specimens="small_biaxial", cycles=3)
-        cfg["calibration"].update(specimens="small_biaxial", **calibration)
-        cfg["loop"].update(specimens="small_biaxial", **loop)
+        cfg["measured"]["sim"].update(specimens="small_biaxial", cases=small["cases"], cycles=3)
+        cfg["calibration"].update(specimens="small_biaxial", cases=small["cases"], **calibration)
+        cfg["loop"].update(specimens="small_biaxial", cases=small["cases"], **loop)
         cfg["parametric"].update(specimens="box_cases", **parametric)
     else:
         cfg["measured"]["sim"].update(cycles=3, **small)

@@ -91,27 +91,17 @@ def test_fouling_scales_stone_stone_friction_by_vci(setup, vci):
         assert np.array_equal(mu, mu0)
 
 
-def test_end_restraint_sets_stone_platen_friction_only(setup):
+@pytest.mark.parametrize("name, parameter, wall, value", [
+    ("end_restraint", "platen_friction", PLATEN, 0.25), ("membrane_friction", "membrane_friction", MEMBRANE, 0.35)])
+def test_a_wall_friction_sets_that_stone_wall_friction_only(setup, name, parameter, wall, value):
     cond = load_conditions(_conditions(setup[2]))
     rig = _rig(setup, cond)
     mu0 = rig.sim.contact_coefficient(MU)
-    assert not np.any(mu0[:2, PLATEN] == 0.25)
-    MODIFIERS["end_restraint"].apply(rig, {"platen_friction": 0.25}, cond.get("covariates"))
+    assert not np.any(mu0[:2, wall] == value)
+    MODIFIERS[name].apply(rig, {parameter: value}, cond.get("covariates"))
     mu = rig.sim.contact_coefficient(MU)
     expected = mu0.copy()
-    expected[:2, PLATEN] = expected[PLATEN, :2] = 0.25
-    assert np.array_equal(mu, expected)
-
-
-def test_membrane_friction_sets_stone_membrane_friction_only(setup):
-    cond = load_conditions(_conditions(setup[2]))
-    rig = _rig(setup, cond)
-    mu0 = rig.sim.contact_coefficient(MU)
-    assert not np.any(mu0[:2, MEMBRANE] == 0.35)
-    MODIFIERS["membrane_friction"].apply(rig, {"membrane_friction": 0.35}, cond.get("covariates"))
-    mu = rig.sim.contact_coefficient(MU)
-    expected = mu0.copy()
-    expected[:2, MEMBRANE] = expected[MEMBRANE, :2] = 0.35
+    expected[:2, wall] = expected[wall, :2] = value
     assert np.array_equal(mu, expected)
 
 
