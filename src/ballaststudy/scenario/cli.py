@@ -37,9 +37,9 @@ def _kind(args, cfg):
     return getattr(args, "rig", None) or cfg["rig"].get("kind", "box")
 
 
-def _params(args, kind=None):
+def _params(args):
     cfg = load_config(args.config)
-    return cfg, params_from_config(kind or _kind(args, cfg), cfg.get("rig", {}))
+    return cfg, params_from_config(_kind(args, cfg), cfg.get("rig", {}))
 
 
 def _case_assemble(args):
@@ -73,8 +73,8 @@ def _case_assemble(args):
 
 
 def case_scenario(args):
-    """(scenario, config, material values) of ``case run``'s arguments; ConfigError naming
-    the file whose value does not fit."""
+    """(scenario, material values) of ``case run``'s arguments; ConfigError naming the file
+    whose value does not fit."""
     kind = kind_of(open_netcdf(args.assembled, "assembled"))
     if args.mode and kind != "biaxial":
         raise ConfigError(args.assembled, None, "--mode needs a biaxial case")
