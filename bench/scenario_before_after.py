@@ -29,9 +29,8 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = ("sun_et_al_16/p60_q230_f5", "sun_et_al_16/p60_q230_f20", "sun_et_al_16/p30_q230_f20")
 TARGETS = ("all", "measured_sim", "calibrate", "parametric", "loop")
-# attributes that say when, where, how long or which paths: not results
-VOLATILE = ("created", "time", "host", "seconds", "wall", "minutes", "version", "commit",
-            "provenance", "history", "_file", "file", "files", "date", "config_path")
+# global attributes that say when, where, how long or which file paths: not results
+VOLATILE = ("provenance", "history", "created", "assembly_seconds", "minutes")
 
 
 def small_config(src):
@@ -45,7 +44,9 @@ def small_config(src):
     small = dict(database="box_test", cases=2, width_m=0.15, height_m=0.30)
     calibration = dict(targets=[TESTS[0]], cycles=6, initial_design=3, iterations=1, batch=2,
                        posterior_samples=1024)
-    loop = dict(targets=list(TESTS), cycles=6, effects=["abrasion", "end_restraint"], design_sets=2,
+    # abrasion only: end_restraint's lubricated end (platen friction 0) and rate's undamped
+    # real-time mode fail this small specimen's consolidation (issue 32), before and after
+    loop = dict(targets=list(TESTS), cycles=6, effects=["abrasion"], design_sets=2,
                 posterior_samples=256)
     parametric = dict(cases=2, design_sets=2, F_str_co=[2.0, 5.0], mu=[0.5, 0.8])
     if "specimens" in cfg:                  # one definition of a specimen set
@@ -81,7 +82,11 @@ def run(src, out):
 
 
 def _volatile(name):
-    return any(v in name.lower() for v in VOLATILE)
+    return name in VOLATILE or name.endswith("_file")
+
+
+def _without_volatile(doc):
+    return {k: v for k, v in doc.items() if not _volatile(k)} if isinstance(doc, dict) else doc
 
 
 def _same(a, b):
@@ -146,7 +151,8 @@ def compare(before, after):
             differ += 1
             continue
         if p.suffix == ".yaml":
-            lines = [] if yaml.safe_load(p.read_text()) == yaml.safe_load(q.read_text()) else ["contents differ"]
+            a, b = (_without_volatile(yaml.safe_load(f.read_text())) for f in (p, q))
+            lines = [] if a == b else ["contents differ"]
         else:
             lines, skipped = compare_nc(p, q)
             left_out |= skipped
