@@ -13,6 +13,7 @@ The thesis' findings: "settlement rises as F_str-co falls" and "settlement rises
 falls" hold if the slope's 95 % interval lies below 0, do not hold if above, else not
 decidable; far below the thesis' scale (study/scale.py) not decidable at this scale."""
 import json
+from collections import Counter
 
 import numpy as np
 import xarray as xr
@@ -101,7 +102,6 @@ def sensitivity_table(ds, seed=0):
 
 def cases_per_value(ds):
     """The fewest cases of any one-at-a-time (parameter, value)."""
-    from collections import Counter
     oat = ds["parameter"].values != DESIGN
     return min(Counter(zip(ds["parameter"].values[oat], ds["value"].values[oat])).values())
 

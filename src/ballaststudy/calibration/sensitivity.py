@@ -18,6 +18,7 @@ BASE_SAMPLES = 1024     # Saltelli base sample: N (d + 2) surrogate evaluations
 
 def sobol_indices(thetas, y, lower, upper, names, seed=0):
     """{name: {S1, S1_conf, ST, ST_conf}} of y (J,) over the sets thetas (J, d)."""
+    # deferred: SALib (and what it imports) only when a parametric report asks for indices
     from SALib.analyze import sobol
     from SALib.sample import sobol as saltelli
     y = np.asarray(y, float)

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
+from scipy.spatial import ConvexHull
 
 from ..schema import ConfigError
 from ..dem import DENSITY_HARD, DENSITY_SOFT, ContactMaterial, FlatJointMaterial
@@ -124,7 +125,6 @@ def _polygon(rng, size, aspect):
     a, b = 0.5 * size, 0.5 * size / aspect
     rad = rng.uniform(0.85, 1.0, n)
     pts = np.column_stack([a * rad * np.cos(ang), b * rad * np.sin(ang)])
-    from scipy.spatial import ConvexHull
     return pts[ConvexHull(pts).vertices]
 
 
