@@ -65,8 +65,27 @@ def check_domain(cfg, file):
     loads = _section(cfg, "rig.box.loading").get("static_loads_kN") or []
     if any(b <= a for a, b in zip(loads, loads[1:])):
         raise ConfigError(file, "rig.box.loading.static_loads_kN", f"{loads} must increase step by step")
+    check_rolling(cfg, file)
     check_specimen_sets(cfg, file)
     return cfg
+
+
+ROLLING_KEYS = ("rolling_friction", "rolling_stiffness_ratio", "rolling_damping_ratio")
+
+
+def check_rolling(cfg, file):
+    """The rolling_* coefficients only act with the law's rolling sub-model: given without
+    ``rolling_resistance: epsd`` they would do nothing, so they are refused."""
+    for rig in ("box", "biaxial"):
+        section = f"rig.{rig}.assembly"
+        sec = _section(cfg, section)
+        if sec.get("rolling_resistance", "none") != "none":
+            continue
+        for key in ROLLING_KEYS:
+            if key in sec:
+                raise ConfigError(file, f"{section}.{key}", f"{sec[key]!r} does nothing with "
+                                  f"{section}.rolling_resistance none; allowed: rolling_resistance "
+                                  "epsd, or leave the key out")
 
 
 def check_specimen_sets(cfg, file):

@@ -31,8 +31,10 @@ def _copy_workflow(tmp_path):
 
 
 @pytest.mark.parametrize("change, key, allowed", [
-    (lambda c: c["parameters"].update(mu_r={"min": 0.1, "max": 0.2}), "calibration.parameters.mu_r",
+    (lambda c: c["parameters"].update(nu={"min": 0.1, "max": 0.2}), "calibration.parameters.nu",
      "unknown key"),
+    (lambda c: c["parameters"].update(mu_r={"min": 0.1, "max": 0.2}), "calibration.parameters.mu_r",
+     "allowed: with rig.biaxial.assembly.rolling_resistance epsd"),
     (lambda c: c["parameters"].update(E_star={"min": 0, "max": 2e9}), "calibration.parameters.E_star.min", "> 0"),
     (lambda c: c["parameters"].update(kappa_star={"min": 3.0, "max": 2.0}), "calibration.parameters.kappa_star.min",
      "must be below calibration.parameters.kappa_star.max"),
@@ -133,7 +135,8 @@ def test_case_run_takes_calibrated_parameters(small_library, tmp_path, capsys):
         assert json.loads(ds.attrs["material_parameters_json"]) == {"F_str_co": 7.0, "mu": 0.5}
     record = json.loads(out.with_name("metrics.nc.prov.json").read_text())
     assert str(good) in json.dumps(record["inputs"]) and record["params"]["material_parameters"] == {"F_str_co": 7.0, "mu": 0.5}
-    for bad, key in (({"mu_r": 1.0}, "parameters.mu_r: unknown parameter"),
+    for bad, key in (({"nu": 1.0}, "parameters.nu: unknown parameter"),
+                     ({"mu_r": 0.1}, "parameters.mu_r: the specimens' contact law"),
                      ({"F_str_co": 0.0}, "parameters.F_str_co: 0.0 is not allowed; allowed: a number > 0"),
                      ({"mu": -1}, "parameters.mu: -1 is not allowed")):
         path = tmp_path / "bad.yaml"
@@ -153,7 +156,7 @@ def test_the_registry_decides_what_is_calibrated(tmp_path):
     from ballaststudy.scenario.modifiers import MATERIAL, material_parameter
     from ballaststudy.schema import load_schema
     default = load_schema("config")["properties"]["calibration"]["properties"]["parameters"]["default"]
-    assert set(default) <= set(MATERIAL) and len(MATERIAL) == 4
+    assert set(default) <= set(MATERIAL) and len(MATERIAL) == 5
     for name in MATERIAL:
         p = material_parameter(name)
         check_parameters({name: {"min": p.low + (1e-9 if p.open_low else 0.0), "max": p.high}}, "c.yaml")

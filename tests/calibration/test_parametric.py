@@ -84,8 +84,10 @@ def test_setting_cli(tmp_path, capsys):
     out = tmp_path / "s.yaml"
     assert main(["parametric", "setting", "F_str_co", "2.5", "mu", "0.6", "--out", str(out)]) == 0
     assert yaml.safe_load(out.read_text()) == {"parameters": {"F_str_co": 2.5, "mu": 0.6}}
-    for argv, key in ((["mu_r", "2"], "parameters: mu_r: unknown"), (["mu"], "NAME VALUE pairs"),
-                      (["mu", "-1"], "parameters.mu: '-1' is not allowed")):
+    for argv, key in ((["nu", "2"], "parameters: nu: unknown"), (["mu"], "NAME VALUE pairs"),
+                      (["mu", "-1"], "parameters.mu: '-1' is not allowed; allowed: a number >= 0"),
+                      (["mu_r", "2"], "parameters.mu_r: '2' is not allowed; allowed: a number >= 0 and <= 1"),
+                      (["F_str_co", "x"], "parameters.F_str_co: 'x' is not allowed")):
         assert main(["parametric", "setting", *argv, "--out", str(tmp_path / "bad.yaml")]) == 2
         line = capsys.readouterr().err.strip()
         assert "\n" not in line and key in line, line

@@ -305,3 +305,35 @@ def test_checkpoint_restart_is_bitwise_with_rolling_law(tmp_path, small_model):
     assert all(np.array_equal(ca[n], cb[n]) for n in ca), "contact_state differs after restart"
     assert ref.energies()["dissipated_rolling"] > 0.0 and rolling_contacts(ref) > 5
     assert len(ref.bonds) > 10, "no bonds installed: restart of bond state not tested"
+
+
+# ------------------------------------------------------------------ mu_r = 0
+def pile(law, mu_r):
+    """Twelve disks of two sizes dropped into a frictional V of walls: rolling, sliding,
+    collisions and lasting contacts."""
+    sim = Simulation(gravity=(0.0, -G), law=law, domain=(-0.3, -0.1, 0.3, 0.5), damping=0.1)
+    sim.set_contact_material(ContactMaterial(E=E, kappa=2.5, mu=0.5, beta_n=0.3, beta_s=0.1,
+                                             mu_r=mu_r, kr_ratio=1.0, eta_r=0.3))
+    sim.add_wall([(-0.2, 0.2), (0.0, 0.0), (0.2, 0.2)])
+    k = np.arange(12)
+    sim.add_balls(-0.05 + 0.03 * (k % 4), 0.15 + 0.03 * (k // 4), R * (1.0 + 0.3 * (k % 2)), RHO,
+                  omega=0.5 * (k - 6))
+    return sim
+
+
+def test_mu_r_zero_is_the_law_without_rolling():
+    """epsd at mu_r = 0 (with its stiffness and dashpot ratios set) carries no moment and
+    leaves the timestep alone: the run equals the law without a rolling sub-model within
+    round-off. The two laws compile to different kernels whose last bits differ (spins
+    1e-14 rad/s apart after 5000 steps, positions still equal); the pile's collisions
+    amplify that chaotically (1e-4 m by 10000 steps), so the check stops at 5000 steps,
+    where mu_r = 0.3 has moved the pile ~1 cm (the comparison can fail)."""
+    runs = {}
+    for name, law, mu_r in (("none", ContactLaw.pfc(), 0.0), ("epsd0", epsd(), 0.0),
+                            ("epsd", epsd(), 0.3)):
+        sim = pile(law, mu_r)
+        sim.run(5000)
+        runs[name] = (sim.dt, sim.balls.pos.copy())
+    assert runs["epsd0"][0] == runs["none"][0]
+    assert np.abs(runs["epsd0"][1] - runs["none"][1]).max() < 1e-9
+    assert np.abs(runs["epsd"][1] - runs["none"][1]).max() > 1e-3

@@ -13,14 +13,14 @@ before any case runs; finished cases are reused (scenario.runner), so an interru
 resumes. Writes evaluations.nc, posterior.nc, calibrated.yaml, curves.png, corner.png and
 summary.md into the folder."""
 import json
+import math
 import time
-from argparse import ArgumentTypeError
 from pathlib import Path
 
 import numpy as np
 import yaml
 
-from ..argtypes import integer, number
+from ..argtypes import integer
 from ..atomic import atomic_path
 from ..config import ConfigError, load_config
 from ..inputs import input_file, open_netcdf, writable_dir, writable_file
@@ -68,6 +68,7 @@ def check_targets(cfg, config_file, tests):
             raise ConfigError(config_file, f"calibration.targets[{k}]", f"{target!r} is not a measured "
                               f"test under {cfg['measured']['tests_dir']}; allowed: {', '.join(tests)}")
     check_parameters(cal["parameters"], config_file)
+    check_rolling_parameters(cfg, config_file)
     if len(cal["targets"]) > 1 and not cal.get("name"):
         raise ConfigError(config_file, "calibration.name", "missing; allowed: a folder name, required "
                           "with more than one target")
@@ -89,6 +90,19 @@ def check_parameters(parameters, config_file):
         if not bounds["min"] < bounds["max"]:
             raise ConfigError(config_file, f"{key}.min", f"{bounds['min']:g} must be below {key}.max "
                               f"({bounds['max']:g})")
+
+
+def check_rolling_parameters(cfg, config_file):
+    """A parameter setting a rolling coefficient (mu_r) needs specimens assembled with the
+    law's rolling sub-model; ConfigError naming the key otherwise."""
+    cal = cfg["calibration"]
+    kind = ((cfg.get("specimens") or {}).get(cal["specimens"]) or {}).get("rig")
+    assembly = ((cfg.get("rig") or {}).get(kind) or {}).get("assembly") or {}
+    for name in cal["parameters"]:
+        if MODIFIERS[name].needs_rolling and assembly.get("rolling_resistance", "none") == "none":
+            raise ConfigError(config_file, f"calibration.parameters.{name}", f"needs rolling "
+                              f"resistance in the specimens' contact law; allowed: with "
+                              f"rig.{kind}.assembly.rolling_resistance epsd")
 
 
 def targets_kind(cfg, config_file, tests_dir):
@@ -237,10 +251,14 @@ def _setting(args):
     for name, text in zip(args.pairs[::2], args.pairs[1::2]):
         if name not in MATERIAL:
             raise ConfigError(args.out, "parameters", f"{name}: unknown; allowed: {', '.join(MATERIAL)}")
+        p = material_parameter(name)
         try:
-            values[name] = number(1e-9, 1000)(text)
-        except ArgumentTypeError as err:
-            raise ConfigError(args.out, f"parameters.{name}", str(err)) from None
+            values[name] = float(text)
+        except ValueError:
+            values[name] = float("nan")
+        if not (math.isfinite(values[name]) and p.admits(values[name])):
+            raise ConfigError(args.out, f"parameters.{name}", f"{text!r} is not allowed; "
+                              f"allowed: a number {p.range_text()}")
     with atomic_path(out) as tmp:
         tmp.write_text(yaml.safe_dump({"parameters": values}))
 

@@ -194,11 +194,15 @@ def rolling_radius(ri, rj):
 @njit(**JIT)
 def rolling_stiffness(law, c, ks, ri, rj):
     """k_r [N m/rad]: epsd k_r = kr_ratio k_s R_r^2 (kr_ratio = 1: PFC's rrlinear);
-    0 without rolling resistance."""
+    0 without rolling resistance, and at mu_r = 0: a spring whose limit moment is 0 is
+    always fully plastic (it carries no moment, stores nothing, and must not shorten the
+    critical timestep), so mu_r = 0 is the law without rolling resistance, bit for bit."""
     kr = 0.0
     if lf(law, ROLLING) == ROLLING_EPSD:
-        rr = rolling_radius(ri, rj)
-        kr = c[lf(law, C_ROLLING) + 1] * ks * rr * rr
+        o = lf(law, C_ROLLING)
+        if c[o] > 0.0:
+            rr = rolling_radius(ri, rj)
+            kr = c[o + 1] * ks * rr * rr
     return kr
 
 
@@ -222,7 +226,8 @@ def rolling_moment(law, c, fn, kr, wrel, minv_i, minv_j, ri, rj, dt, hist, p):
         m = hist[p, h] - kr * wrel * dt
         lim = c[o] * rolling_radius(ri, rj) * max(fn, 0.0)
         if abs(m) > lim:
-            work = lim * (abs(m) - lim) / kr      # limit moment x plastic rotation
+            # limit moment x plastic rotation (none at mu_r = 0: lim and k_r are 0)
+            work = lim * (abs(m) - lim) / kr if kr > 0.0 else 0.0
             m = lim if m > 0.0 else -lim
         elif c[o + 2] > 0.0:
             ir_inv = minv_j / (1.5 * rj * rj)

@@ -12,7 +12,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..dem import ContactMaterial, Simulation
+from ..dem import ContactLaw, ContactMaterial, Simulation
 
 
 @dataclass
@@ -39,6 +39,13 @@ class DepositionParams:
     damping: float = 0.7
     contact_damping_ratio: float = 0.0
     dt_safety: float = 0.8
+    # rolling resistance of every contact (the law's rolling sub-model, fixed at assembly):
+    # "none" (Table 4.2's linear contact) or "epsd" (Ai et al. 2011 type C, dem/law.py) with
+    # mu_r, k_r / (k_s R_r^2) and the rolling dashpot's ratio of critical
+    rolling_resistance: str = "none"
+    rolling_friction: float = 0.0
+    rolling_stiffness_ratio: float = 1.0
+    rolling_damping_ratio: float = 0.0
 
     @classmethod
     def from_config(cls, rig):
@@ -84,13 +91,16 @@ def shelf_centres(stones, x_min, x_max, gap_factor, rng):
 
 def new_simulation(lib, params, domain, contact_damping):
     """The engine for a specimen of ``lib``'s stones: drop gravity and damping, Table 4.2's
-    contact (with the dashpot ratio ``contact_damping``) for every material pair."""
+    contact (with the dashpot ratio ``contact_damping``) for every material pair, with the
+    rolling resistance the params switch on."""
     p = params
     sim = Simulation(thickness=lib.thickness, gravity=(0.0, -p.drop_gravity_m_s2),
-                     damping=p.drop_damping, dt_safety=p.dt_safety, domain=domain)
+                     damping=p.drop_damping, dt_safety=p.dt_safety, domain=domain,
+                     law=ContactLaw.pfc(rolling=p.rolling_resistance))
     lc = lib.materials[0]["lc"]
-    sim.set_contact_material(ContactMaterial(E=lc.E, kappa=lc.kappa, mu=lc.mu,
-                                             beta_n=contact_damping, beta_s=contact_damping))
+    sim.set_contact_material(ContactMaterial(
+        E=lc.E, kappa=lc.kappa, mu=lc.mu, beta_n=contact_damping, beta_s=contact_damping,
+        mu_r=p.rolling_friction, kr_ratio=p.rolling_stiffness_ratio, eta_r=p.rolling_damping_ratio))
     return sim
 
 

@@ -28,7 +28,7 @@ from ..rig.kinds import kind_of, params_from_config
 from ..rig.library import load_library
 from ..rig.params import case_seed
 from ..rig.vtk import vtk_hook
-from .modifiers import load_material_values, material_modifiers
+from .modifiers import ModifierError, load_material_values, material_modifiers
 from .runner import checkpoint_of, prepared_run, write_case
 from .scenario import conditioned_rig, scenario
 
@@ -109,6 +109,8 @@ def _case_run(args):
                                 "material_parameters": material, "scenario_key": sc.key})
     try:
         run, resumed = prepared_run(sc, 0, out, args.checkpoint_every, args.restart)
+    except ModifierError as err:          # a calibrated value this specimen cannot take
+        raise ConfigError(args.parameters, f"parameters.{err.name}", err.reason) from None
     except (ValueError, KeyError, TypeError) as err:
         raise ConfigError(args.assembled, None, f"not an assembled case ({err})") from None
     if resumed and not args.quiet:

@@ -20,10 +20,10 @@ import math
 
 from ...schema import ConfigError, load_yaml
 from . import abrasion, end_restraint, fouling, material, membrane_friction, rate
-from .base import COVARIATES, Modifier, ModifierParameter, covariate  # noqa: F401 (the registry's face)
+from .base import COVARIATES, Modifier, ModifierError, ModifierParameter, covariate  # noqa: F401 (the registry's face)
 
 MODIFIERS = {m.name: m for m in (
-    material.F_STR, material.MU, material.E_STAR, material.KAPPA_STAR,
+    material.F_STR, material.MU, material.E_STAR, material.KAPPA_STAR, material.MU_R,
     rate.MODIFIER, abrasion.MODIFIER, fouling.MODIFIER, end_restraint.MODIFIER,
     membrane_friction.MODIFIER,
 )}

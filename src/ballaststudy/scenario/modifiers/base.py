@@ -7,6 +7,14 @@ from dataclasses import dataclass
 from typing import Callable
 
 
+class ModifierError(ValueError):
+    """A modifier that cannot act on this rig (``name``: the modifier's)."""
+
+    def __init__(self, name, message):
+        super().__init__(f"modifier {name}: {message}")
+        self.name, self.reason = name, message
+
+
 @dataclass(frozen=True)
 class ModifierParameter:
     name: str
@@ -34,6 +42,8 @@ class Modifier:
     current: Callable = None            # (rig) -> {name: value} an assembled rig has untouched
     role: str = "effect"                # "material": a Table 4.2 parameter a calibration varies;
                                         # "effect": a mechanism the loop may add
+    needs_rolling: bool = False         # sets a rolling coefficient: the rig must be assembled
+                                        # with the law's rolling sub-model (rolling_resistance)
 
     def testable(self, conditions_list):
         """Whether the tests can show it: one that acts only through a covariate needs a
