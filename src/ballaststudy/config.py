@@ -35,7 +35,7 @@ ORDERED_PAIRS = (
 # stages that run a specimen set, and the rig its set must be (None: the targets decide,
 # calibration.cli.targets_kind)
 SPECIMEN_STAGES = (("measured.sim", "biaxial"), ("calibration", None), ("loop", "biaxial"),
-                   ("parametric", "box"))
+                   ("parametric", "box"), ("strength", "biaxial"))
 
 
 def _section(cfg, dotted):

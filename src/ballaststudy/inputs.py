@@ -54,6 +54,8 @@ KINDS = {
                      attrs=("conditions_file",)),
     "forms": Kind("a form database", "ballaststudy forms generate", ("a", "b", "c", "mass")),
     "metrics": Kind("a case's metrics.nc", "ballaststudy case run", dims=("cycle",)),
+    "strength": Kind("a strength test", "ballaststudy case strength", ("deviator_stress", "axial_strain"),
+                     attrs=("q_peak", "confining_pressure_Pa", "case")),
 }
 CHECKPOINT = Kind("a checkpoint", "ballaststudy case run", ("engine", "state", "layout", "params", "cycles"),
                   hint="; run again with --restart to start afresh")

@@ -18,12 +18,14 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..argtypes import SEED, integer, number
+from ..atomic import atomic_path
 from ..config import ConfigError, load_config
 from ..inputs import open_netcdf, writable_dir, writable_file
 from ..measured.importer import load_conditions
 from ..provenance import Recorder
 from ..rig.assembly import assemble
-from ..rig.biaxial import assemble_biaxial
+from ..rig.biaxial import BiaxialRig, assemble_biaxial
+from ..rig.biaxial.strength import run_strength, strength_dataset, strength_envelope
 from ..rig.kinds import kind_of, params_from_config
 from ..rig.library import load_library
 from ..rig.params import case_seed
@@ -142,6 +144,56 @@ def _case_run(args):
         print(f"wrote {out}")
 
 
+def _case_strength(args):
+    """The monotonic strength test of one assembled biaxial specimen at p."""
+    out = writable_file(args.out)
+    ds_in = open_netcdf(args.assembled, "assembled")
+    if kind_of(ds_in) != "biaxial":
+        raise ConfigError(args.assembled, None, "a strength test needs a biaxial specimen")
+    cfg = load_config(args.config)
+    st = cfg["strength"]
+    recorder = Recorder("case strength", inputs=(args.assembled, args.config),
+                        params={"confining_pressure_kPa": args.p_kPa, "strength": st, "case": args.case})
+    rig = BiaxialRig.from_dataset(ds_in, "engine_checkpoint")
+    rig.params = params_from_config("biaxial", cfg.get("rig", {}))     # as the scenario runner does
+    bar = tqdm(desc="axial strain", total=round(st["axial_strain_max"], 4), unit="", disable=args.quiet,
+               bar_format="{desc}: {n:.4f}/{total:.4f}")
+    try:
+        result = run_strength(rig, args.p_kPa, st["inertial_number"], st["axial_strain_max"],
+                              st["side_servo_gain_m_s_per_kPa"], st["side_servo_integral_steps"],
+                              progress=lambda ea: bar.update(max(0.0, round(ea, 4) - bar.n)))
+    except RuntimeError as err:      # a consolidation that does not converge: say where, exit 2
+        raise ConfigError(args.assembled, "rig", str(err)) from None
+    finally:
+        bar.close()
+    ds = strength_dataset(result, args.p_kPa, {"case": args.case, "specimen": str(args.assembled)})
+    with atomic_path(out) as tmp:
+        ds.to_netcdf(tmp)
+    recorder.finish()
+    recorder.write_beside(out)
+    if not args.quiet:
+        print(f"wrote {out}: q_peak {result.q_peak / 1e3:.1f} kPa, phi_peak {result.phi_peak_deg:.1f} deg, "
+              f"psi {result.dilatancy_angle_deg:.1f} deg at axial strain {result.axial_strain_at_peak:.4f}")
+
+
+def _case_envelope(args):
+    out = writable_file(args.out)
+    recorder = Recorder("case envelope", inputs=args.tests)
+    datasets = [open_netcdf(p, "strength") for p in args.tests]
+    try:
+        ds = strength_envelope(datasets)
+    except ValueError as err:
+        raise ConfigError(args.tests[0], None, str(err)) from None
+    with atomic_path(out) as tmp:
+        ds.to_netcdf(tmp)
+    recorder.finish()
+    recorder.write_beside(out)
+    if not args.quiet:
+        for k, p in enumerate(ds["confining_pressure"].values):
+            print(f"p {p / 1e3:g} kPa: q_peak {float(ds['q_peak_mean'][k]) / 1e3:.1f} kPa, phi_peak "
+                  f"{float(ds['phi_peak_deg_mean'][k]):.1f} +- {float(ds['phi_peak_deg_std'][k]):.1f} deg")
+
+
 def register(subparsers):
     """Add the ``case`` stage (actions ``assemble`` and ``run``)."""
     c = subparsers.add_parser("case", help="cases of a rig: assembly and loading (thesis 4.2.2-4.2.3)")
@@ -180,4 +232,19 @@ def register(subparsers):
     r.add_argument("--config", default="config/config.yaml", type=Path)
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_case_run)
+
+    t = cs.add_parser("strength", help="biaxial: monotonic compression through the peak at p")
+    t.add_argument("assembled", metavar="ASSEMBLED.nc", type=Path)
+    t.add_argument("--confining-pressure-kPa", dest="p_kPa", type=number(0.001, 1e6), required=True)
+    t.add_argument("--case", type=integer(0, 1_000_000), default=0, help="the specimen's case number (recorded)")
+    t.add_argument("--out", required=True, type=Path, help="strength test (.nc)")
+    t.add_argument("--config", default="config/config.yaml", type=Path)
+    t.add_argument("--quiet", action="store_true")
+    t.set_defaults(func=_case_strength)
+
+    e = cs.add_parser("envelope", help="strength envelope of strength tests (case strength)")
+    e.add_argument("tests", metavar="STRENGTH.nc", type=Path, nargs="+")
+    e.add_argument("--out", required=True, type=Path, help="envelope (.nc)")
+    e.add_argument("--quiet", action="store_true")
+    e.set_defaults(func=_case_envelope)
     return c

@@ -1,0 +1,80 @@
+"""The monotonic strength test (rig.biaxial.strength): the peak read from a planted curve
+(phi from sin phi = q / (2 sigma_3 + q), psi from sin psi = -r / (2 - r), r = d eps_v /
+d eps_a) to round-off; the inertial-number rate; on a small specimen the platen advances
+at that rate, the sides hold p while it dilates, and the envelope gathers the tests."""
+import math
+
+import numpy as np
+import pytest
+
+from ballaststudy.cli import main
+from ballaststudy.rig.biaxial import BiaxialParams, assemble_biaxial
+from ballaststudy.rig.biaxial.strength import (_peak, inertial_strain_rate, run_strength,
+                                               strength_dataset, strength_envelope)
+from ballaststudy.rig.library import load_library
+
+P = 30.0e3
+
+
+def test_peak_of_a_planted_curve():
+    ea = np.arange(0.0, 0.08, 1e-4)
+    q = 200e3 * (ea / 0.03) * np.exp(1.0 - ea / 0.03)        # from 0, peak 200 kPa at 3 %
+    r = -0.4                                                 # dilating at the peak
+    ev = 0.002 + r * (ea - 0.03)
+    q_peak, phi, e_peak, psi, reached, seated = _peak(ea, ev, q, np.full_like(ea, P))
+    assert q_peak == pytest.approx(200e3, rel=1e-9) and e_peak == pytest.approx(0.03, abs=1e-9)
+    assert phi == pytest.approx(math.degrees(math.asin(200e3 / (2 * P + 200e3))), rel=1e-9)
+    assert psi == pytest.approx(math.degrees(math.asin(0.4 / 2.4)), rel=1e-6)
+    assert reached and 0.0 < seated < 0.03
+    rising = _peak(ea[:200], ev[:200], q[:200], np.full(200, P))
+    assert not rising[4]                                     # no peak within the strain
+
+
+def test_inertial_strain_rate():
+    # I = gamma_dot d sqrt(rho / p): 1e-3 = gamma_dot 0.04 sqrt(2500 / 1e4) -> 0.05 / s
+    assert inertial_strain_rate(1e-3, 0.04, 2500.0, 1.0e4) == pytest.approx(0.05, rel=1e-12)
+
+
+@pytest.fixture(scope="module")
+def strength(small_library):
+    params = BiaxialParams(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000,
+                           fill_area_ratio=0.9, consolidation_window_steps=1000)
+    rig = assemble_biaxial(load_library(small_library), params, seed=7)
+    return rig, run_strength(rig, P / 1e3, inertial_number=1e-3, axial_strain_max=0.02)
+
+
+def test_compression_at_the_rate_with_p_held(strength):
+    rig, r = strength
+    assert r.stop.startswith("the specimen failed") or "axial strain" in r.stop
+    # the platen's strain after the run's steps at the inertial rate (dt fixed: true masses)
+    assert r.axial_strain[-1] == pytest.approx(r.strain_rate * r.steps * rig.sim.dt, rel=0.05)
+    assert np.all(np.abs(r.confining - P) < 0.15 * P)
+    assert r.q_peak > 0.5 * P and 0.0 < r.phi_peak_deg < 90.0
+    assert r.stone_density == pytest.approx(float(np.median(rig.sim.balls.mass[rig.stone_balls()]
+                                                           / (np.pi * rig.sim.balls.rad[rig.stone_balls()] ** 2))),
+                                            rel=0.05)
+
+
+def test_envelope_gathers_the_tests(strength, tmp_path, capsys):
+    _, r = strength
+    paths = []
+    for k, p in enumerate((30.0, 60.0, 30.0)):
+        path = tmp_path / f"s{k}.nc"
+        strength_dataset(r, p, {"case": (0, 0, 1)[k]}).to_netcdf(path)
+        paths.append(path)
+    out = tmp_path / "envelope.nc"
+    assert main(["case", "envelope", *map(str, paths), "--out", str(out), "--quiet"]) == 0
+    import xarray as xr
+    with xr.open_dataset(out) as env:
+        assert list(env["confining_pressure"].values) == [30e3, 60e3]
+        assert env["q_peak"].shape == (2, 2) and np.isnan(env["q_peak"].values[1, 1])
+        assert float(env["q_peak_mean"][0]) == pytest.approx(r.q_peak)
+        assert env.attrs["Conventions"].startswith("CF") and env["phi_peak_deg"].attrs["units"] == "degree"
+    assert main(["case", "envelope", str(paths[0]), str(paths[0]), "--out", str(out), "--quiet"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and "twice" in line, line
+    bad = tmp_path / "bad.nc"
+    xr.Dataset(attrs={"Conventions": "CF-1.8"}).to_netcdf(bad)
+    assert main(["case", "envelope", str(bad), "--out", str(tmp_path / "e2.nc"), "--quiet"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and f"{bad}: " in line and "expected a strength test" in line, line

@@ -1,0 +1,40 @@
+# The monotonic strength test (config section ``strength``): the first `cases` specimens of
+# the set compressed through their peak at every confining pressure of the measured tests
+# the biaxial rig runs -> results/strength/<set>/p<p>kPa/case<k>.nc, and their envelope
+# results/strength/<set>/envelope.nc (`snakemake --cores 2 strength`).
+from ballaststudy.rig.kinds import kind_for_test
+
+STRENGTH = config["strength"]
+STRENGTH_SPECIMENS = specimen_files("strength")
+STRENGTH_P = sorted({load_conditions(MEASURED_TESTS_DIR / f"{t}.yaml")["confining_pressure_kPa"]
+                     for t in MEASURED_TESTS
+                     if kind_for_test(load_conditions(MEASURED_TESTS_DIR / f"{t}.yaml")["rig"]) == "biaxial"})
+STRENGTH_DIR = f"{RESULTS}/strength/{STRENGTH['specimens']}"
+
+
+rule strength_case:
+    input:
+        specimen=lambda wc: STRENGTH_SPECIMENS[int(wc.case)],
+    output:
+        f"{STRENGTH_DIR}/p{{p}}kPa/case{{case}}.nc",
+    params:
+        strength=trigger("strength", drop=("specimens", "cases")),
+        loading=trigger("rig.biaxial.loading", drop=conditioned_keys("biaxial", MEASURED_TESTS)),
+        config=CONFIG_FILE,
+    log:
+        f"{RESULTS}/logs/strength/{STRENGTH['specimens']}/p{{p}}kPa/case{{case}}.log",
+    shell:
+        "ballaststudy case strength {input.specimen} --confining-pressure-kPa {wildcards.p} "
+        "--case {wildcards.case} --config {params.config} --out {output} --quiet > {log} 2>&1"
+
+
+rule strength:
+    input:
+        expand(f"{STRENGTH_DIR}/p{{p}}kPa/case{{case}}.nc", p=[f"{p:g}" for p in STRENGTH_P],
+               case=range(STRENGTH["cases"])),
+    output:
+        f"{STRENGTH_DIR}/envelope.nc",
+    log:
+        f"{RESULTS}/logs/strength/{STRENGTH['specimens']}/envelope.log",
+    shell:
+        "ballaststudy case envelope {input} --out {output} --quiet > {log} 2>&1"
