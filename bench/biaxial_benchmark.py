@@ -7,11 +7,14 @@
 
 Uses the BPM library given, else box_test's at the config's resolution (built once and
 cached in results/bench_cache, like bench/case_benchmark.py). Prints assembly and
-consolidation times, then per loading mode (quasi-static; real-time at the frequency f,
+consolidation times, what sets the timestep (the limiting ball, its springs, the per-ball
+dt_crit's percentiles: Simulation.timestep_limit), then per loading mode (quasi-static; real-time at the frequency f,
 which it states) balls, bonds, steps per cycle, time per step and
 ``minutes_per_1000_cycles=<x>`` extrapolated from the cyclic phase. Both modes start from
 the same assembled specimen; --width/--height/--membrane-segments change the config's
-specimen (e.g. measured_sim's 0.15 x 0.30 m, or a membrane). Never a test."""
+specimen (e.g. measured_sim's 0.15 x 0.30 m, or a membrane). Last, settle2d's ball-steps/s
+(bench/engine_vs_lammps.py, N = --settle2d-n) in the same process: the engine's rate on
+this machine now, beside the rig's. Never a test."""
 import argparse
 import os
 import sys
@@ -35,9 +38,11 @@ def main(argv=None):
     ap.add_argument("--width", type=float, help="specimen width [m] (config's)")
     ap.add_argument("--height", type=float, help="specimen height [m] (config's)")
     ap.add_argument("--membrane-segments", type=int, help="1 rigid sides, n > 1 a membrane (config's)")
+    ap.add_argument("--settle2d-n", type=int, default=5000, help="balls of the settle2d reference (0: none)")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from case_benchmark import box_test_library
+    from engine_vs_lammps import run_ours
 
     from ballaststudy.config import load_config
     from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRig, BiaxialRun, assemble_biaxial
@@ -55,6 +60,11 @@ def main(argv=None):
     print(f"specimen {params.width_m:g} x {params.height_m:g} m, membrane_segments="
           f"{params.membrane_segments}: balls={n_balls} "
           f"bonds={rig.layout.bonds_installed} dt={rig.sim.dt:.3g} s")
+    lim = rig.sim.timestep_limit()
+    print(f"timestep: dt_crit {lim['dt_crit']:.3g} s set by ball {lim['ball']} (radius "
+          f"{lim['radius'] * 1e3:.2f} mm, mass {lim['mass'] * 1e3:.1f} g per m of thickness, "
+          f"{lim['bonds']} flat joints, by {lim['springs']}); per-ball dt_crit percentiles "
+          f"1/10/50: {', '.join(f'{v:.3g}' for v in lim['percentiles'])} s")
     assembled = Path(tempfile.mkdtemp()) / "assembled.nc"
     rig.save(assembled)
     for mode in a.modes:
@@ -88,6 +98,9 @@ def main(argv=None):
         print(f"[{mode}{state}] axial strain after each cycle: "
               f"{[round(r['axial_strain'], 5) for r in run.s.rows]}")
         print(f"[{mode}{state}] minutes_per_1000_cycles={per * 1000 / 60:.2f}")
+    if a.settle2d_n:
+        ref = run_ours(a.settle2d_n, 20000)
+        print(f"settle2d N={a.settle2d_n}: ball_steps_per_s={ref['bsps']:.3g} (same process, after the rig)")
     return 0
 
 

@@ -48,6 +48,24 @@ def test_consolidation_reaches_p(specimen):
     assert run.s.height0 == pytest.approx(rig.height())
 
 
+def test_consolidated_only_at_rest_and_in_a_row(specimen):
+    """The last windows of the consolidation: consolidation_windows_in_a_row of them within
+    the tolerance; a window counts only with the axial strain rate since the last one below
+    consolidation_strain_rate_max_1_s (rates 0.75 and 1.5 x the limit: a factor of two in
+    the rate's formula fails this)."""
+    rig = BiaxialRig.load(specimen)
+    run = BiaxialRun(rig, cycles=1)
+    while run.s.phase == "consolidation":
+        run.advance()
+    p, n = rig.params, rig.params.consolidation_windows_in_a_row
+    np.testing.assert_allclose(run.s.window_means[-n:], p.confining_pressure_kPa * KPA,
+                               rtol=p.consolidation_tolerance)
+    h, t, limit = rig.height(), rig.sim.time, p.consolidation_strain_rate_max_1_s
+    for factor, at_rest in ((0.75, True), (1.5, False)):
+        run.s.window_height, run.s.window_time = h * (1.0 + factor * limit * 0.01), t - 0.01
+        assert run._at_rest() is at_rest, factor
+
+
 def test_static_deviator_hold_balances_forces(specimen):
     """Means over the window after the hold (forces from the walls, W and H from their
     positions): each side p H t within 2 %, bottom platen = top + weight of the stones

@@ -13,7 +13,7 @@ from numba import njit
 
 from .contacts import pair_elastic_energy
 from .engine import run_steps
-from .integrate import critical_dt
+from .integrate import ball_springs, critical_dt
 from .walls import wall_elastic_energy
 
 
@@ -30,6 +30,14 @@ def timestep(law):
     @njit
     def bound(run, balls, pr, wp, wmat, bonds):
         return critical_dt(law, run, balls, pr, wp, wmat, bonds)
+    return bound
+
+
+@lru_cache(maxsize=None)
+def springs(law):
+    @njit
+    def bound(run, balls, pr, wp, wmat, bonds):
+        return ball_springs(law, run, balls, pr, wp, wmat, bonds)
     return bound
 
 

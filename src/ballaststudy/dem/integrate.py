@@ -299,14 +299,11 @@ def _add_pair_springs(law, coef, rad, mat, t, i, j, ktr, krot):
 
 
 @njit(cache=True, error_model="numpy")
-def critical_dt(law, run, balls, pr, wp, wmat, bonds):
-    """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) over every pair of the Verlet
-    lists (touching or about to touch: conservative until the next rebuild; the
-    flat-jointed pairs the list leaves out count as if in it) and bonds;
-    k_tr sums k_n + k_s, k_rot sums k_s R^2 + k_r (the law's stiffnesses).
-    With density scaling, inertial masses are raised to k_tr*(dt/f)^2 instead (never
-    lowered below the real mass: PFC scales both ways; we only add inertia)."""
-    numba.literally(law)
+def ball_springs(law, run, balls, pr, wp, wmat, bonds):
+    """(k_tr, k_rot) of every ball: its springs over every pair of the Verlet lists
+    (touching or about to touch: conservative until the next rebuild; the flat-jointed
+    pairs the list leaves out count as if in it) and bonds; k_tr sums k_n + k_s, k_rot
+    sums k_s R^2 + k_r (the law's stiffnesses)."""
     prm = run.prm
     rad = balls.rad
     mat = balls.mat
@@ -341,6 +338,18 @@ def critical_dt(law, run, balls, pr, wp, wmat, bonds):
         for i in (bonds.i[b], bonds.j[b]):
             ktr[i] += kn + ks
             krot[i] += kb + ks * rad[i] ** 2
+    return ktr, krot
+
+
+@njit(cache=True, error_model="numpy")
+def critical_dt(law, run, balls, pr, wp, wmat, bonds):
+    """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) (ball_springs).
+    With density scaling, inertial masses are raised to k_tr*(dt/f)^2 instead (never
+    lowered below the real mass: PFC scales both ways; we only add inertia)."""
+    numba.literally(law)
+    prm = run.prm
+    n = balls.rad.shape[0]
+    ktr, krot = ball_springs(law, run, balls, pr, wp, wmat, bonds)
     f = prm[P.DT_SAFETY]
     dtc = 1.0e30
     for i in range(n):

@@ -20,7 +20,7 @@ from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
 from .clumps import mass_properties
 from .control import Control
-from .bound import stepper, timestep
+from .bound import springs, stepper, timestep
 from .engine import rebuild_lists
 from .integrate import reset_forces
 from .law import ContactLaw
@@ -477,6 +477,28 @@ class Simulation:
         return timestep(self._layout)(self._run_state(), self.balls.kernel(),
                                       self.pairs.kernel(), self.wpairs.kernel(),
                                       self.walls.mat, self.bonds.kernel())
+
+    def timestep_limit(self):
+        """What sets dt_crit: the limiting ball (id, radius [m], mass [kg], "translation"
+        or "rotation", its bonds) and the per-ball dt_crit's percentiles (1, 10, 50) [s],
+        from the springs critical_dt sums (the current Verlet lists and bonds), with the
+        inertia the balls have now (density scaling included)."""
+        self._prepare()
+        ktr, krot = springs(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
+                                          self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
+        b = self.balls
+        ok = (b.alive == 1) & (ktr > 0.0)
+        with np.errstate(divide="ignore"):
+            dt_tr = np.where(ok, np.sqrt(1.0 / (b.minv * np.where(ok, ktr, 1.0))), np.inf)
+            dt_rot = np.where(ok & (krot > 0.0), np.sqrt(1.0 / (b.iinv * np.where(krot > 0, krot, 1.0))), np.inf)
+        per_ball = np.minimum(dt_tr, dt_rot)
+        i = int(np.argmin(per_ball))
+        active = self.bonds.active == 1
+        return dict(ball=i, radius=float(b.rad[i]), mass=float(b.mass[i]),
+                    springs="rotation" if dt_rot[i] < dt_tr[i] else "translation",
+                    bonds=int(np.sum(self.bonds.i[active] == i) + np.sum(self.bonds.j[active] == i)),
+                    dt_crit=float(per_ball[i]),
+                    percentiles=[float(v) for v in np.percentile(per_ball[ok], [1, 10, 50])])
 
     def run(self, n_steps, callback=None, every=None, control=None):
         """Advance ``n_steps`` steps. With ``callback``, call ``callback(sim)`` every

@@ -53,7 +53,8 @@ def biaxial_control(rig):
                      * p.servo_gain_m_s_per_kPa, **servo)       # left: +x raises its stress
              for k, (sensor, g) in enumerate(zip(sensors, groups))]
     top = c.walls(lay.top, 1)
-    s_top = c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa, **servo)
+    s_top = c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa,
+                    **{**servo, "v_max": p.consolidation_platen_velocity_m_s})
     sig3 = p.confining_pressure_kPa * KPA
     lo, hi = sig3 + p.deviator_min_kPa * KPA, sig3 + p.deviator_max_kPa * KPA
     profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=p.platen_v_min_m_s,
@@ -84,6 +85,9 @@ CYCLE_FIELDS = {
 class BiaxialState(CycleState):
     phase: str = "consolidation"
     windows: int = 0
+    settled_windows: int = 0          # windows in a row within the tolerance, at rest
+    window_height: float = float("nan")   # specimen height and time at the last window
+    window_time: float = float("nan")
     loading_start_step: int = -1      # end of consolidation
     height0: float = float("nan")     # H0, W0: at the end of consolidation
     width0: float = float("nan")
@@ -152,8 +156,10 @@ class BiaxialRun(CyclicRun):
         s.window_means.append([float(v) for v in sig])
         p3 = p.confining_pressure_kPa * KPA
         target = np.array([c.get(self.ids.top, "target"), p3, p3])
-        if np.all(np.abs(sig - target) / target < p.consolidation_tolerance):
-            s.windows = 0
+        within = np.all(np.abs(sig - target) / target < p.consolidation_tolerance)
+        s.settled_windows = s.settled_windows + 1 if within and self._at_rest() else 0
+        if s.settled_windows >= p.consolidation_windows_in_a_row:
+            s.windows = s.settled_windows = 0
             if s.phase == "hold":
                 s.phase = "held"
                 return
@@ -174,6 +180,15 @@ class BiaxialRun(CyclicRun):
                                f"not reached within {s.windows} windows (last means "
                                f"{', '.join(f'{v / KPA:.2f}' for v in sig)} kPa)")
 
+    def _at_rest(self):
+        """Whether the axial strain rate since the last window is below
+        consolidation_strain_rate_max_1_s (the platen no longer travels: a window within
+        the tolerance while it still settles is luck, not equilibrium)."""
+        s, h, t = self.s, self.rig.height(), self.rig.sim.time
+        rate = abs(h - s.window_height) / (h * (t - s.window_time)) if t > s.window_time else np.inf
+        s.window_height, s.window_time = h, t
+        return bool(rate < self.rig.params.consolidation_strain_rate_max_1_s)
+
     def hold(self, q_kPa):
         """A static deviator stage (after consolidation, instead of cycling): the top servo
         holds p + q, the side ones p, until the window means of all three are within the
@@ -188,7 +203,7 @@ class BiaxialRun(CyclicRun):
         for k in (*self.ids.sides, self.ids.top):
             c.set(k, window_steps=p.consolidation_window_steps)
         c.reset_window()
-        s.phase, s.windows = "hold", 0
+        s.phase, s.windows, s.settled_windows = "hold", 0, 0
         while s.phase == "hold":
             self.advance()
         return np.array(s.window_means[-1])

@@ -28,6 +28,9 @@ class BiaxialParams(DepositionParams):
     consolidation_window_steps: int = 5000
     consolidation_tolerance: float = 0.02
     consolidation_max_windows: int = 200
+    consolidation_platen_velocity_m_s: float = 0.05   # top servo's limit while consolidating
+    consolidation_windows_in_a_row: int = 3           # consolidated: this many windows in a row
+    consolidation_strain_rate_max_1_s: float = 2.0e-3  # ... with the specimen at rest
     mode: str = "quasi_static"         # or "real_time": true masses, sinusoidal q at f
     frequency_Hz: float = 20.0
     realtime_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo in real-time mode
