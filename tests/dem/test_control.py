@@ -127,6 +127,43 @@ def test_cyclic_speed_profile():
     assert c.velocity(k, 45.0) == pytest.approx(0.1)
 
 
+def pressed_ball(d0):
+    """A ball between two vertical walls, each pressing it by ``d0``, no gravity."""
+    sim = Simulation(gravity=(0, 0), damping=0.7, law="hooke", dt=1e-5, hooke=HOOKE,
+                     domain=(-0.1, -0.1, 0.1, 0.1))
+    sim.add_wall([(-R + d0, -0.05), (-R + d0, 0.05)])
+    right = sim.add_wall([(R - d0, -0.05), (R - d0, 0.05)])
+    sim.add_balls([0.0], [0.0], [R], 2650.0)
+    return sim, right
+
+
+@pytest.mark.parametrize("factor, within", [(1.0, True), (0.0, False), (2.0, False)])
+def test_sine_feed_forward_follows_the_target(factor, within):
+    """The right wall under a SINE controller with a negligible servo gain: its feed-forward
+    -C dF/dt alone makes the wall force follow 50-150 N at 5 Hz (far below the ball's
+    ~250 Hz) within 2 % of the amplitude when C is the system's compliance 2 / k_n (the
+    free ball shares a wall move between its two contacts); without it (C = 0) or with
+    twice it the force misses by a large part of the amplitude."""
+    lo, hi, f = 50.0, 150.0, 5.0
+    sim, right = pressed_ball(lo / KN)
+    c = Control(every=10)
+    sensor = c.wall_force(right, axis=0)
+    k = c.sine(sensor, c.walls(right, axis=0), lo=lo, hi=hi, frequency=f, gain=1e-12,
+               v_max=1.0, integral_steps=0)
+    c.build()
+    c.set(k, t0=0.0, compliance=factor * 2.0 / KN)
+    rows = []
+    while sim.step < 20000:                  # one period
+        sim.run(20000 - sim.step, control=c)
+        rows.append(c.drain())
+        c.clear_event()
+    rows = np.concatenate(rows)
+    t = rows[:, 0] * sim.dt
+    target = lo + 0.5 * (hi - lo) * (1.0 - np.cos(2.0 * np.pi * f * t))
+    error = np.abs(rows[:, 1 + sensor] - target).max() / (hi - lo)
+    assert (error < 0.02) == within, error
+
+
 def test_floor_sensor_balances_load_and_weight():
     """Servo at 50 N on the plate: the floor sensor (downwards +) averages the load plus
     the ball's weight over the last window within 1 %."""

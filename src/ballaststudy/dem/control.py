@@ -28,8 +28,10 @@ Controllers:
           is within ``brake`` x (hi - lo) of the bound it approaches, then linearly down
           to v_min at the bound; reverses at hi (event PEAK) and at lo (event TROUGH).
   SINE    real-time sinusoid: a PI servo (as SERVO) whose target follows
-          lo + (hi - lo) (1 - cos(2 pi f (t - t0))) / 2 in simulated time t, from lo at t0;
-          events at its half periods (PEAK at the maxima, TROUGH at the minima).
+          lo + (hi - lo) (1 - cos(2 pi f (t - t0))) / 2 in simulated time t, from lo at t0,
+          plus a feed-forward -C d(target)/dt with the actuator's compliance C [m per
+          reading unit] (0: none; the rig sets it from what it measures); events at its
+          half periods (PEAK at the maxima, TROUGH at the minima).
 
 All arrays live in one named container (``ControlArrays``); the ``Control`` class builds it
 and saves/restores it (rigs keep it in their checkpoints).
@@ -57,6 +59,7 @@ EVENT_NAMES = {WINDOW: "window", PEAK: "peak", TROUGH: "trough", BUFFER_FULL: "b
 TARGET, GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, WINDOW_STEPS, TOUCH = range(7)
 LO, HI, VMIN, BRAKE = 0, 1, 2, 4          # CYCLIC: VMAX = 3 as above
 SINE_LO, SINE_HI, FREQUENCY = 5, 6, 7     # SINE: GAIN ... INTEGRAL_STEPS as SERVO
+COMPLIANCE = 0                            # SINE: the feed-forward's (TARGET's slot)
 INTEGRAL, TOUCHED, APPROACH_STEPS, WINDOW_DONE = range(4)
 HALF_PERIODS, T0, NOW = 1, 2, 3           # SINE state (INTEGRAL = 0 as SERVO)
 DIRECTION = 0
@@ -70,7 +73,7 @@ _SERVO_PAR = {"target": TARGET, "gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": V
 _CYCLIC_PAR = {"lo": LO, "hi": HI, "v_min": VMIN, "v_max": VMAX, "brake": BRAKE}
 _SINE_PAR = {"gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": VMAX,
              "integral_steps": INTEGRAL_STEPS, "lo": SINE_LO, "hi": SINE_HI,
-             "frequency": FREQUENCY}
+             "frequency": FREQUENCY, "compliance": COMPLIANCE}
 _SINE_STATE = {"integral": INTEGRAL, "half_periods": HALF_PERIODS, "t0": T0, "now": NOW}
 
 ControlArrays = namedtuple(
@@ -145,6 +148,13 @@ def sine_target(par, st):
 
 
 @njit(**NO_NRT)
+def sine_rate(par, st):
+    """d(target)/dt of the sinusoid [reading unit per s]."""
+    w = 2.0 * math.pi * par[FREQUENCY]
+    return 0.5 * (par[SINE_HI] - par[SINE_LO]) * w * math.sin(w * (st[NOW] - st[T0]))
+
+
+@njit(**NO_NRT)
 def _pi_velocity(st, par, target, f, every):
     vmax = par[VMAX]
     e = par[GAIN] * (target - f) / par[GAIN_UNIT]
@@ -164,7 +174,8 @@ def controller_velocity(c, k):
     if c.ctl[k, 0] == SERVO:
         return _pi_velocity(st, par, par[TARGET], f, float(c.cfg[EVERY]))
     if c.ctl[k, 0] == SINE:
-        return _pi_velocity(st, par, sine_target(par, st), f, float(c.cfg[EVERY]))
+        v = _pi_velocity(st, par, sine_target(par, st), f, float(c.cfg[EVERY]))
+        return min(max(v - par[COMPLIANCE] * sine_rate(par, st), -vmax), vmax)
     bound = par[HI] if st[DIRECTION] < 0.0 else par[LO]
     frac = min(1.0, abs(bound - f) / (par[BRAKE] * (par[HI] - par[LO])))
     return st[DIRECTION] * (par[VMIN] + (vmax - par[VMIN]) * frac)

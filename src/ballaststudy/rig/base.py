@@ -119,7 +119,7 @@ class Rig:
     @classmethod
     def from_parts(cls, engine, layout, params, source="checkpoint"):
         """From engine checkpoint bytes and the layout / parameter dicts."""
-        return cls(cls.sim_from_bytes(engine, source), cls.Layout(**layout), cls.Params(**params))
+        return cls(cls.sim_from_bytes(engine, source), cls.Layout(**layout), cls.Params.from_record(params))
 
     @classmethod
     def load(cls, path):
@@ -130,5 +130,5 @@ class Rig:
         """From a loaded assembled-case Dataset (the file's content, see ``to_dataset``)."""
         data = np.asarray(ds["engine_checkpoint"].values, np.uint8).tobytes()
         lay = cls.Layout(**json.loads(ds.attrs["rig_layout_json"]))
-        prm = cls.Params(**json.loads(ds.attrs["rig_params_json"]))
+        prm = cls.Params.from_record(json.loads(ds.attrs["rig_params_json"]))
         return cls(cls.sim_from_bytes(data, source), lay, prm)

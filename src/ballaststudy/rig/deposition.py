@@ -56,6 +56,14 @@ class DepositionParams:
         names = {f.name for f in fields(cls)}
         return cls(**{k: v for k, v in merged.items() if k in names})
 
+    @classmethod
+    def from_record(cls, d):
+        """From the params a file of ours recorded (an assembled case, a checkpoint): keys
+        a later version retired are dropped (the loading a run does comes from its config
+        or, resumed, from its saved controllers), new keys take their defaults."""
+        names = {f.name for f in fields(cls)}
+        return cls(**{k: v for k, v in d.items() if k in names})
+
     def to_dict(self):
         return asdict(self)
 

@@ -71,7 +71,8 @@ CYCLE_FIELDS = {
     "cycle_end_step": ("1", "engine step at the end of the cycle"),
     "cycle_steps": ("1", "engine steps in the cycle"),
     "axial_stress_max": ("Pa", "largest axial stress sigma_1 at the top platen in the cycle (2D: force / (width t))"),
-    "axial_stress_min": ("Pa", "smallest axial stress sigma_1 in the cycle"),
+    "axial_stress_min": ("Pa", "smallest axial stress sigma_1 in the cycle's unloading (after its peak: "
+                         "cycle 0 starts from the consolidation's p)"),
     "confining_stress_mean": ("Pa", "mean side-wall stress sigma_3 over the cycle (2D: force / (height t))"),
     "height_at_end": ("m", "specimen height between the platens at the end of the cycle"),
     "width_at_end": ("m", "mean specimen width between the sides (area / height) at the end of the cycle"),
@@ -92,6 +93,8 @@ class BiaxialState(CycleState):
     height0: float = float("nan")     # H0, W0: at the end of consolidation
     width0: float = float("nan")
     window_means: list = field(default_factory=list)    # stress window means (axial, left, right)
+    compliance: float = 0.0           # real time: the feed-forward's C [m/Pa], last half cycle's
+    half_sample0: int = -1            # real time: the sample where this half cycle began
     failure: str = ""                 # why the specimen failed ("" = it did not)
     peak_stress: float = 0.0          # sigma_1's largest recent mean in this loading, its strain
     peak_strain: float = 0.0
@@ -172,7 +175,8 @@ class BiaxialRun(CyclicRun):
             c.set(self.ids.top, active=False)
             if p.mode == "real_time":       # the sinusoid starts at p + q_min now
                 c.set(self.ids.sine, active=True, t0=self.rig.sim.time, half_periods=0,
-                      integral=0.0)
+                      integral=0.0, compliance=s.compliance)
+                s.half_sample0 = len(self.samples["step"]) - 1
             else:
                 c.set(self.ids.profile, active=True, direction=-1)
         elif s.windows >= p.consolidation_max_windows:
@@ -210,6 +214,25 @@ class BiaxialRun(CyclicRun):
 
     def on_peak(self):
         self._rescale()
+        self._feed_forward()
+        self.s.half_sample0 = len(self.samples["step"]) - 1
+
+    def _feed_forward(self):
+        """Real time: the sinusoid's feed-forward compliance C = -dy/dsigma_1 of the platen
+        over the half cycle just ended (from the samples; a branch whose stress moved less
+        than a tenth of the amplitude keeps the last C), so the servo only corrects what C
+        does not foresee. Off with realtime_feed_forward false."""
+        p, s = self.rig.params, self.s
+        if p.mode != "real_time" or not p.realtime_feed_forward:
+            return
+        k0, k1 = s.half_sample0, len(self.samples["step"]) - 1
+        if k0 < 0 or k1 <= k0:
+            return
+        y, sig = self.samples["platen_y"], self.samples["axial_stress"]
+        dsig = sig[k1] - sig[k0]
+        if abs(dsig) >= 0.1 * (p.deviator_max_kPa - p.deviator_min_kPa) * KPA:
+            s.compliance = max(0.0, -(y[k1] - y[k0]) / dsig)
+            self.control.set(self.ids.sine, compliance=s.compliance)
 
     def check_stalled(self):
         """A stress-controlled specimen that cannot carry sigma_1 = p + q_max fails, as in the
@@ -245,10 +268,12 @@ class BiaxialRun(CyclicRun):
         """The first trough after consolidation ends cycle 0 (N = 1 of a laboratory test: the
         first loading from p to p + q_max and the unloading to p + q_min)."""
         self._rescale()
+        self._feed_forward()
         self.s.peak_stress = 0.0        # each loading branch is watched for softening anew
         if self.s.phase == "loading":
             self.s.phase = "cyclic"
         super()._trough()
+        self.s.half_sample0 = len(self.samples["step"]) - 1    # after the cycle's thinning
 
     def strains(self):
         """(axial, volumetric) strain since the end of consolidation, compression +."""
@@ -260,9 +285,10 @@ class BiaxialRun(CyclicRun):
         rig, s = self.rig, self.s
         modes = rig.sim.breakages()["mode"][s.log0:]
         sig1 = self.cycle_samples("axial_stress")
+        unloading = sig1[max(0, s.peak_sample - s.cycle_sample0):]
         sig3 = 0.5 * (self.cycle_samples("left_stress") + self.cycle_samples("right_stress"))
         return dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
-                    axial_stress_max=float(sig1.max()), axial_stress_min=float(sig1.min()),
+                    axial_stress_max=float(sig1.max()), axial_stress_min=float(unloading.min()),
                     confining_stress_mean=float(sig3.mean()), height_at_end=rig.height(),
                     width_at_end=rig.width(),
                     width_max_at_end=float(np.max(rig.side_x("right") - rig.side_x("left"))),

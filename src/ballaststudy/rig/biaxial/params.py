@@ -35,6 +35,7 @@ class BiaxialParams(DepositionParams):
     frequency_Hz: float = 20.0
     realtime_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo in real-time mode
     realtime_velocity_m_s: float = 0.05
+    realtime_feed_forward: bool = True          # the servo plus -C dq/dt, C measured per half cycle
     platen_v_max_m_s: float = 0.005
     platen_v_min_m_s: float = 0.0005
     braking_fraction: float = 0.25

@@ -6,41 +6,20 @@ volumetric strain, and at the peak q_peak, the friction angle phi_peak
 (sin phi = (sigma_1 - sigma_3) / (sigma_1 + sigma_3)) and the dilatancy angle psi
 (2D: sin psi = -r / (2 - r), r = d eps_v / d eps_a, compression positive).
 
-The rate is set by physics, not by cost: the inertial number I = gamma_dot d sqrt(rho / p)
-(GDR MiDi 2004; da Cruz et al. 2005, Phys. Rev. E 72) measures how far a sheared granular
-assembly is from quasi-static; in the mu(I) law mu = mu_s + (mu_2 - mu_s) / (I_0 / I + 1)
-(I_0 ~ 0.3) the stress ratio at I = 1e-3 exceeds its rate-independent value by ~0.3 % of
-(mu_2 - mu_s), well inside a specimen's scatter, so gamma_dot = I / (d sqrt(rho / p)) with
-I = ``strength_inertial_number`` (1e-3), d the stones' median equivalent diameter, rho the
-stones' density as the engine runs them (no density scaling here: it would raise I by
-the square root of its factor at the same rate, and save no steps) and gamma_dot taken
-as the axial strain rate."""
+The rate is set by physics, not by cost (inertial.py): the strain rate of inertial number
+``inertial_number`` (config strength.inertial_number, 1e-3), with the quasi-static mode's
+density scaling (loading_dt_factor: inertia added to the smallest balls only)."""
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import xarray as xr
 
+from .inertial import inertial_strain_rate, stone_size_and_density
 from .loading import BiaxialRun
 from .params import KPA
 
 SMOOTH_STRAIN = 0.002        # q is read as its mean over this axial-strain window
 DILATANCY_STRAIN = 0.005     # d eps_v / d eps_a: a line over +- this around the peak
-
-
-def stone_size_and_density(rig):
-    """(median equivalent diameter sqrt(4 A / pi) of the stones, their mean density) [m,
-    kg/m^3]: A a stone's ball area, the density the engine's masses have (mass / area t)."""
-    b, ids = rig.sim.balls, rig.stone_balls()
-    area = np.pi * b.rad[ids] ** 2
-    per_stone = np.bincount(b.stone[ids], weights=area)
-    d = float(np.median(np.sqrt(4.0 * per_stone[per_stone > 0] / np.pi)))
-    rho = float(b.mass[ids].sum() / (area.sum() * rig.sim.thickness))
-    return d, rho
-
-
-def inertial_strain_rate(inertial_number, d, rho, p):
-    """gamma_dot = I / (d sqrt(rho / p)) [1/s] (p [Pa])."""
-    return inertial_number / (d * np.sqrt(rho / p))
 
 
 @dataclass
@@ -76,7 +55,7 @@ def run_strength(rig, p_kPa, inertial_number=1e-3, axial_strain_max=0.10, side_g
     28-49, it overshoots). Returns a StrengthResult."""
     prm = rig.params
     prm.confining_pressure_kPa = p_kPa
-    prm.mode, prm.loading_dt_factor = "quasi_static", 1.0      # true masses throughout
+    prm.mode = "quasi_static"
     prm.failure_axial_strain = axial_strain_max
     prm.max_cycle_steps = np.iinfo(np.int64).max // 2
     run = BiaxialRun(rig, cycles=1)
