@@ -7,6 +7,7 @@ from dataclasses import fields
 
 from .forms.objective import FormParams, ObjectiveError, build_objective
 from .rig.biaxial import BiaxialParams
+from .rig.deposition import ROLLING_COEFFICIENTS
 from .rig.params import RigParams
 from .schema import ConfigError, fill_defaults, load_schema, load_yaml, schema_path, validate  # noqa: F401 (re-exported)
 from .seeds import job_seed  # noqa: F401 (re-exported: the workflow's rules take it from here)
@@ -70,9 +71,6 @@ def check_domain(cfg, file):
     return cfg
 
 
-ROLLING_KEYS = ("rolling_friction", "rolling_stiffness_ratio", "rolling_damping_ratio")
-
-
 def check_rolling(cfg, file):
     """The rolling_* coefficients only act with the law's rolling sub-model: given without
     ``rolling_resistance: epsd`` they would do nothing, so they are refused."""
@@ -81,7 +79,7 @@ def check_rolling(cfg, file):
         sec = _section(cfg, section)
         if sec.get("rolling_resistance", "none") != "none":
             continue
-        for key in ROLLING_KEYS:
+        for key in ROLLING_COEFFICIENTS:
             if key in sec:
                 raise ConfigError(file, f"{section}.{key}", f"{sec[key]!r} does nothing with "
                                   f"{section}.rolling_resistance none; allowed: rolling_resistance "

@@ -15,6 +15,10 @@ import numpy as np
 from ..dem import ContactLaw, ContactMaterial, Simulation
 
 
+# the rolling sub-model's coefficients: keys only with rolling_resistance epsd
+ROLLING_COEFFICIENTS = ("rolling_friction", "rolling_stiffness_ratio", "rolling_damping_ratio")
+
+
 @dataclass
 class DepositionParams:
     """What the kit's stages read (every rig's assembly section has these keys; the values

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from ..seeds import job_seed
-from .deposition import DepositionParams
+from .deposition import ROLLING_COEFFICIENTS, DepositionParams
 
 
 @dataclass
@@ -78,8 +78,11 @@ class RigParams(DepositionParams):
         self.settlement_force_kN = mean
 
     def to_config(self):
-        """The ``rig:`` dict these parameters come from (by stage)."""
+        """The ``rig:`` dict these parameters come from (by stage; without rolling
+        resistance its coefficients are no keys)."""
         d = self.to_dict()
+        if self.rolling_resistance == "none":
+            d = {k: v for k, v in d.items() if k not in ROLLING_COEFFICIENTS}
         return {"box": {"assembly": {k: v for k, v in d.items() if k not in LOADING_KEYS},
                         "loading": {k: v for k, v in d.items() if k in LOADING_KEYS}}}
 
