@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
+from ...metrics.strain import specimen_strains
 from .inertial import inertial_strain_rate, stone_size_and_density
 from .loading import BiaxialRun
 from .params import KPA
@@ -73,6 +74,7 @@ def run_strength(rig, p_kPa, inertial_number=1e-3, axial_strain_max=0.10, side_g
     k0, s0 = len(run.samples["step"]), rig.sim.step
     while run.s.phase != "done":
         run.advance()
+        run._rescale()      # sigma = F / (L t) on the current W and H: no event rescales here
         if progress is not None:
             progress(run.strains()[0])
     curve = _curve(run, k0)
@@ -88,7 +90,7 @@ def _curve(run, k0):
     s, S = run.s, {k: np.asarray(v[k0:]) for k, v in run.samples.items()}
     bottom = float(run.rig.sim.walls.seg[run.rig.layout.bottom[0], 1])
     h, w = S["platen_y"] - bottom, S["right_x"] - S["left_x"]
-    ea, ev = 1.0 - h / s.height0, 1.0 - (w * h) / (s.width0 * s.height0)
+    ea, ev = specimen_strains(h, w, s.height0, s.width0)
     order = np.maximum.accumulate(ea)
     keep = np.unique(np.searchsorted(order, np.arange(0.0, order[-1], 1e-4)))
     sig3 = 0.5 * (S["left_stress"] + S["right_stress"])
