@@ -81,10 +81,10 @@ def main(argv=None):
             run.advance()
         print(f"[{mode}{state}] consolidation + first loading: {time.perf_counter() - t1:.1f} s, "
               f"{rig.sim.step - s1} steps, windows {len(run.s.window_means)}")
-        t2, s2 = time.perf_counter(), rig.sim.step
+        t2, s2, rows0 = time.perf_counter(), rig.sim.step, len(run.s.rows)
         run.run()
         t = time.perf_counter() - t2
-        steps, done = rig.sim.step - s2, len(run.s.rows)
+        steps, done = rig.sim.step - s2, len(run.s.rows) - rows0     # the cycles timed
         if run.s.failure:
             print(f"[{mode}{state}] q_max {rig.params.deviator_max_kPa:g} kPa: {run.s.failure} "
                   f"(after {done} cycles; give --deviator-max below the peak)")
@@ -97,6 +97,16 @@ def main(argv=None):
               f"time_per_step_us={t / steps * 1e6:.1f} ball_steps_per_s={n_balls * steps / t:.3g}")
         print(f"[{mode}{state}] axial strain after each cycle: "
               f"{[round(r['axial_strain'], 5) for r in run.s.rows]}")
+        hi = (rig.params.confining_pressure_kPa + rig.params.deviator_max_kPa) * 1e3
+        lo = (rig.params.confining_pressure_kPa + rig.params.deviator_min_kPa) * 1e3
+        c = run.cyc
+        print(f"[{mode}{state}] per cycle: sigma_1 max - (p + q_max) [kPa] "
+              f"{[round((v - hi) / 1e3, 2) for v in c['axial_stress_max']]}, sigma_1 min - "
+              f"(p + q_min) [kPa] {[round((v - lo) / 1e3, 2) for v in c['axial_stress_min']]}, "
+              f"steps {[int(v) for v in c['cycle_steps']]}")
+        print(f"[{mode}{state}] per cycle: frequency [Hz] "
+              f"{[round(v, 2) for v in c['loading_frequency']]}, inertia added "
+              f"{[round(v, 4) for v in c['inertia_added']]}")
         print(f"[{mode}{state}] minutes_per_1000_cycles={per * 1000 / 60:.2f}")
     if a.settle2d_n:
         ref = run_ours(a.settle2d_n, 20000)

@@ -61,7 +61,8 @@ def main(argv=None):
         bottom = np.array(run.cyc["axial_stress_min"]) / lo
         worst = max(np.abs(top - 1).max(), np.abs(bottom - 1).max()) if top.size else float("nan")
         print(f"f={f:g} Hz, feed-forward {p.realtime_feed_forward}: {time.perf_counter() - t:.0f} s, "
-              f"{run.s.failure or 'no failure'}, compliance {run.s.compliance:.3g} m/Pa")
+              f"{run.s.failure or 'no failure'}, compliance loading / unloading "
+              f"{run.s.compliance[0]:.3g} / {run.s.compliance[1]:.3g} m/Pa")
         print(f"  max/(p+q_max) per cycle: {' '.join(f'{v:.3f}' for v in top)}")
         print(f"  min/(p+q_min) per cycle: {' '.join(f'{v:.3f}' for v in bottom)}")
         print(f"  worst error {100 * worst:.1f} %", flush=True)

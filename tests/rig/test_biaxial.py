@@ -108,8 +108,13 @@ def test_cycles_reach_bounds_with_confinement_held(cycled, tmp_path):
     p = cycled.rig.params
     c = cycled.cyc
     assert len(c["cycle_end_step"]) == CYCLES
-    assert np.all(np.array(c["axial_stress_max"]) >= (p.confining_pressure_kPa + p.deviator_max_kPa) * KPA)
-    assert np.all(np.array(c["axial_stress_min"]) <= (p.confining_pressure_kPa + p.deviator_min_kPa) * KPA)
+    hi = (p.confining_pressure_kPa + p.deviator_max_kPa) * KPA
+    lo = (p.confining_pressure_kPa + p.deviator_min_kPa) * KPA
+    top, bottom = np.array(c["axial_stress_max"]), np.array(c["axial_stress_min"])
+    assert top[0] >= hi           # the first loading: the profile, up to its bound
+    # then the sinusoid (its servo, feed-forward and adapted bounds), the last cycle closest
+    assert np.all(np.abs(top - hi) < 0.1 * (hi - lo)) and np.all(np.abs(bottom - lo) < 0.1 * (hi - lo))
+    assert abs(top[-1] - hi) < 0.02 * (hi - lo) and abs(bottom[-1] - lo) < 0.02 * (hi - lo)
     np.testing.assert_allclose(c["confining_stress_mean"], p.confining_pressure_kPa * KPA, rtol=0.05)
     ea = [r["axial_strain"] for r in cycled.s.rows]
     assert np.all(np.isfinite(ea)) and ea[-1] > 0          # compressed under the deviator
@@ -195,12 +200,14 @@ def test_case_cli_runs_the_biaxial_rig(small_library, tmp_path):
         prm = json.loads(ds.attrs["rig_params_json"])
         assert (prm["confining_pressure_kPa"], prm["deviator_max_kPa"]) == (20.0, 50.0)
         assert prm["frequency_Hz"] == 10.0 and prm["mode"] == "quasi_static"
-        assert np.all(ds["axial_stress_max"].values >= 70e3)
+        assert ds["axial_stress_max"].values[0] >= 70e3     # the first loading to p + q_max
     assert (tmp_path / "behaviours.png").is_file() and any((tmp_path / "vtk").iterdir())
 
 
 def test_real_time_mode_follows_the_frequency(specimen):
-    """Real-time mode at f = 20 Hz: true masses (no density scaling), each cycle lasts
+    """Real-time mode at f = 20 Hz: the real masses but for the density scaling of the
+    smallest balls within realtime_added_inertia_max (1 %: the run ends at 1-1.5 % with the
+    contacts it has then, and at a dt above the automatic one), each cycle lasts
     1/f within 1 % of simulated time, the measured axial stress oscillates at f within 1 %
     (the best least-squares sinusoid over a grid of 0.8-1.2 f in 0.1 % steps: single
     peaks are too noisy to time; cycles 1-3, after the start-up of cycle 0 from the
@@ -211,9 +218,9 @@ def test_real_time_mode_follows_the_frequency(specimen):
     p = rig.params
     p.mode, p.frequency_Hz = "real_time", 20.0
     run = BiaxialRun(rig, cycles=4).run()
-    b = rig.sim.balls
-    ids = rig.stone_balls()
-    assert np.allclose(b.minv[ids] * b.mass[ids], 1.0)
+    assert p.realtime_added_inertia_max == 0.01
+    assert 0.005 < rig.sim.added_inertia() < 0.015
+    assert rig.sim.dt > 1.05 * rig.sim.scaled_timestep(0.0)      # the automatic dt
     periods = np.array(run.cyc["cycle_steps"]) * rig.sim.dt
     np.testing.assert_allclose(periods, 1.0 / p.frequency_Hz, rtol=0.01)
     keep = np.array(run.samples["cycle"]) >= 1

@@ -483,9 +483,7 @@ class Simulation:
         or "rotation", its bonds) and the per-ball dt_crit's percentiles (1, 10, 50) [s],
         from the springs critical_dt sums (the current Verlet lists and bonds), with the
         inertia the balls have now (density scaling included)."""
-        self._prepare()
-        ktr, krot = springs(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
-                                          self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
+        ktr, krot = self._ball_springs()
         b = self.balls
         ok = (b.alive == 1) & (ktr > 0.0)
         with np.errstate(divide="ignore"):
@@ -499,6 +497,50 @@ class Simulation:
                     bonds=int(np.sum(self.bonds.i[active] == i) + np.sum(self.bonds.j[active] == i)),
                     dt_crit=float(per_ball[i]),
                     percentiles=[float(v) for v in np.percentile(per_ball[ok], [1, 10, 50])])
+
+    def _ball_springs(self):
+        """Each ball's summed translational and rotational springs (integrate.ball_springs,
+        the current Verlet lists and bonds)."""
+        self._prepare()
+        return springs(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
+                                     self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
+
+    def added_inertia(self):
+        """The inertial mass density scaling adds to the free balls now, as a fraction of
+        their real mass (0 without density scaling)."""
+        b = self.balls
+        free = (b.alive == 1) & (b.clump < 0)
+        return float((1.0 / b.minv[free]).sum() / b.mass[free].sum() - 1.0) if free.any() else 0.0
+
+    def scaled_timestep(self, added_inertia_max):
+        """The largest fixed dt whose density scaling (``set_density_scaling``) adds at most
+        ``added_inertia_max`` x the free balls' real mass to their inertial mass, and as
+        much of their moment of inertia: density scaling raises only the balls whose own
+        dt_crit is below dt / f (the few smallest, an artefact of the ball model), so a
+        small added fraction buys much of the dt that the typical ball allows. At least
+        the automatic dt (no inertia added). Reads the current contacts: call it on the
+        specimen as it is loaded."""
+        ktr, krot = self._ball_springs()
+        b = self.balls
+        ok = (b.alive == 1) & (ktr > 0.0) & (b.clump < 0)
+        f = float(self.prm[P.DT_SAFETY])
+        m, inertia, kt, kr = b.mass[ok], b.inertia[ok], ktr[ok], krot[ok]
+
+        def added(dt):
+            s2 = (dt / f) ** 2
+            return max(np.maximum(kt * s2 - m, 0.0).sum() / m.sum(),
+                       np.maximum(kr * s2 - inertia, 0.0).sum() / inertia.sum())
+
+        with np.errstate(divide="ignore"):
+            lo = f * float(np.sqrt(np.minimum(m / kt, inertia / kr).min()))   # the automatic dt
+        hi = lo
+        while added(2.0 * hi) <= added_inertia_max:
+            hi *= 2.0
+        hi *= 2.0
+        for _ in range(60):          # added() grows monotonically with dt: bisection
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if added(mid) <= added_inertia_max else (lo, mid)
+        return lo
 
     def run(self, n_steps, callback=None, every=None, control=None):
         """Advance ``n_steps`` steps. With ``callback``, call ``callback(sim)`` every

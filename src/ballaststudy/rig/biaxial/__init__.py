@@ -12,11 +12,15 @@ specimen bulges as a real one does (the segments' heights follow the platens: ea
 2. isotropic consolidation: three stress servos (left, right, top) hold p until the
    window means of all three are within ``consolidation_tolerance`` of p;
 3. cyclic loading: the side servos keep p; the top platen drives the axial stress
-   sigma_1 = p + q between p + q_min and p + q_max — quasi-static: the bound-to-bound
-   profile at the configured platen speeds, with density scaling (loading_dt_factor);
-   real-time: true masses, a stress servo following a sinusoid at the test's frequency f
-   in simulated time (a cycle lasts 1/f). Cycle 0 is the first loading from p to p + q_max
-   and the unloading to p + q_min: load cycle N = 1 of a laboratory test.
+   sigma_1 = p + q between p + q_min and p + q_max with a stress servo following a
+   sinusoid in simulated time, plus a feed-forward from the compliance it measures per
+   branch and bounds adapted cycle by cycle — real time: at the test's frequency f (a
+   cycle lasts 1/f), true masses but for realtime_added_inertia_max of density scaling;
+   quasi-static: at the largest f the inertial-number and stress-wave bounds allow
+   (``inertial``), with density scaling (loading_dt_factor), its first loading the
+   bound-to-bound profile at the configured platen speeds. Cycle 0 is the first loading
+   from p to p + q_max and the unloading to p + q_min: load cycle N = 1 of a laboratory
+   test.
 2D stresses are forces per boundary length per thickness t (sigma = F / (L t)); strains are
 compression positive from the end of consolidation: axial 1 - H/H0, volumetric (area)
 1 - W H / (W0 H0), H and W between the walls' faces.

@@ -1,26 +1,64 @@
-"""The inertial number of a sheared granular specimen, I = gamma_dot d sqrt(rho / p)
-(GDR MiDi 2004; da Cruz et al. 2005, Phys. Rev. E 72): how far its deformation is from
-quasi-static. In the mu(I) law mu = mu_s + (mu_2 - mu_s) / (I_0 / I + 1) (I_0 ~ 0.3) the
-stress ratio at I = 1e-3 exceeds its rate-independent value by ~0.3 % of (mu_2 - mu_s),
-inside any specimen's scatter: below it, loading faster costs nothing physical. d is the
-stones' median equivalent diameter, rho their density (the real masses: density scaling
-adds inertia to the smallest balls only, ~2 % of the mass), gamma_dot taken as the axial
-strain rate. The biaxial rig's loading rates (strength test, quasi-static cycles) come
-from here."""
+"""How fast a biaxial specimen may be cycled and still be quasi-static. Quasi-static cycles
+are the real-time sinusoid (the platen's stress servo plus its feed-forward) at a frequency
+below two physical bounds, with density scaling (only the states at rest matter):
+
+- The inertial number I = gamma_dot d sqrt(rho / p) (GDR MiDi 2004; da Cruz et al. 2005,
+  Phys. Rev. E 72) of the sheared specimen. In the mu(I) law mu = mu_s + (mu_2 - mu_s) /
+  (I_0 / I + 1) (I_0 ~ 0.3) the stress ratio at I = 1e-3 exceeds its rate-independent
+  value by ~0.3 % of (mu_2 - mu_s), inside any specimen's scatter: below it, loading
+  faster costs nothing physical. d is the stones' median equivalent diameter, rho their
+  density (the inertial masses the engine steps with, density scaling included), p the
+  confining pressure (the smallest principal stress: the bound is tightest there),
+  gamma_dot the axial strain rate, at its largest in a sinusoid pi f C (q_max - q_min) / H
+  (C = -dH/dsigma_1 the platen's compliance over a branch).
+- The stress wave: the axial stress reaches the far platen a travel time t_w = H / c =
+  sqrt(rho_b C H) later (c = sqrt(E / rho_b) the bar wave speed of the branch's modulus E =
+  H / C, rho_b the specimen's bulk density), so while the stress changes at a rate r the
+  specimen's stress differs along its height by about r t_w. The sinusoid's largest rate
+  is pi f (q_max - q_min); keeping r t_w below a fraction ``lag`` of q_max - q_min bounds
+  f. At the reversals the rate is zero and so is the lag: the bounds are reached by the
+  whole specimen.
+
+The strength test's strain rate comes from the inertial number alone."""
 import numpy as np
 
 
-def stone_size_and_density(rig):
+def stone_size_and_density(rig, inertial=False):
     """(median equivalent diameter sqrt(4 A / pi) of the stones, their mean density) [m,
-    kg/m^3]: A a stone's ball area, the density the engine's masses have (mass / area t)."""
+    kg/m^3]: A a stone's ball area, the density the engine's masses have (mass / area t;
+    ``inertial``: the inertial masses, density scaling included)."""
     b, ids = rig.sim.balls, rig.stone_balls()
     area = np.pi * b.rad[ids] ** 2
     per_stone = np.bincount(b.stone[ids], weights=area)
     d = float(np.median(np.sqrt(4.0 * per_stone[per_stone > 0] / np.pi)))
-    rho = float(b.mass[ids].sum() / (area.sum() * rig.sim.thickness))
+    mass = 1.0 / b.minv[ids] if inertial else b.mass[ids]
+    rho = float(mass.sum() / (area.sum() * rig.sim.thickness))
     return d, rho
+
+
+def bulk_density(rig):
+    """The specimen's bulk density [kg/m^3]: the stones' inertial mass over the volume W H t
+    between the walls."""
+    b, ids = rig.sim.balls, rig.stone_balls()
+    return float((1.0 / b.minv[ids]).sum() / (rig.width() * rig.height() * rig.sim.thickness))
 
 
 def inertial_strain_rate(inertial_number, d, rho, p):
     """gamma_dot = I / (d sqrt(rho / p)) [1/s] (p [Pa])."""
     return inertial_number / (d * np.sqrt(rho / p))
+
+
+def travel_time(rho_b, compliance, height):
+    """t_w = H / c = sqrt(rho_b C H) [s] (C [m/Pa])."""
+    return float(np.sqrt(rho_b * compliance * height))
+
+
+def quasi_static_frequency(rig, compliance, p, dq, inertial_number, lag):
+    """The largest sinusoid frequency [Hz] within both bounds: the inertial number at p
+    [Pa] (pi f C dq / H <= gamma_dot(I)) and the stress wave (pi f dq t_w <= lag dq), for
+    the deviator range dq [Pa] and the platen's compliance C [m/Pa]."""
+    d, rho = stone_size_and_density(rig, inertial=True)
+    h = rig.height()
+    f_inertial = inertial_strain_rate(inertial_number, d, rho, p) * h / (np.pi * compliance * dq)
+    f_wave = lag / (np.pi * travel_time(bulk_density(rig), compliance, h))
+    return float(min(f_inertial, f_wave))

@@ -13,6 +13,7 @@ from ...metrics.cycle import MetricsParams
 from ...metrics.strain import specimen_strains
 from ...metrics.void_ratio import SolidCache
 from ..cyclic import CycleState, CyclicRun
+from .inertial import quasi_static_frequency
 from .params import KPA
 from .specimen import BiaxialRig, place_membrane
 
@@ -57,9 +58,8 @@ def biaxial_control(rig):
                     **{**servo, "v_max": p.consolidation_platen_velocity_m_s})
     sig3 = p.confining_pressure_kPa * KPA
     lo, hi = sig3 + p.deviator_min_kPa * KPA, sig3 + p.deviator_max_kPa * KPA
-    profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=p.platen_v_min_m_s,
-                       v_max=p.platen_v_max_m_s, brake=p.braking_fraction, direction=-1,
-                       active=False)
+    profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=0.0, v_max=0.0, brake=0.0, direction=-1,
+                       active=False)      # the strength test's constant speed (it sets it)
     sine = c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
                   gain=p.realtime_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.realtime_velocity_m_s,
                   integral_steps=p.servo_integral_steps, active=False)
@@ -79,6 +79,11 @@ CYCLE_FIELDS = {
     "width_max_at_end": ("m", "largest width between the sides (the membrane's bulge) at the end of the cycle"),
     "elements_broken_tension": ("1", "flat-joint elements broken in tension since loading began"),
     "elements_broken_shear": ("1", "flat-joint elements broken in shear since loading began"),
+    "inertia_added": ("1", "inertial mass density scaling adds to the free balls at the end of the "
+                      "cycle, as a fraction of their real mass"),
+    "loading_frequency": ("Hz", "frequency of the sinusoidal deviator in the cycle's unloading "
+                          "(real time: the test's; quasi-static: from the inertial-number and "
+                          "stress-wave bounds, rig.biaxial.inertial)"),
 }
 
 
@@ -93,9 +98,12 @@ class BiaxialState(CycleState):
     height0: float = float("nan")     # H0, W0: at the end of consolidation
     width0: float = float("nan")
     window_means: list = field(default_factory=list)    # stress window means (axial, left, right)
-    compliance: float = 0.0           # real time: the feed-forward's C [m/Pa], last half cycle's
-    half_sample0: int = -1            # real time: the sample where this half cycle began
+    compliance: list = field(default_factory=lambda: [0.0, 0.0])   # C [m/Pa] of the last loading
+                                      # and unloading branch (0: none yet)
+    half_sample0: int = -1            # the sample where this half cycle began
+    prev_half_sample0: int = -1       # ... and where the one before it began
     failure: str = ""                 # why the specimen failed ("" = it did not)
+    unloading_frequency: float = 0.0  # the sinusoid's, in this cycle's unloading
     peak_stress: float = 0.0          # sigma_1's largest recent mean in this loading, its strain
     peak_strain: float = 0.0
 
@@ -118,7 +126,7 @@ class BiaxialRun(CyclicRun):
         self._metrics_setup()
         if p.mode not in ("quasi_static", "real_time"):
             raise ValueError(f"loading mode {p.mode!r}: quasi_static or real_time")
-        if p.mode == "quasi_static" and p.loading_dt_factor > 1.0 and not resumed:
+        if p.loading_dt_factor > 1.0 and not resumed:   # at rest while consolidating
             rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
     def _metrics_setup(self):
@@ -146,7 +154,19 @@ class BiaxialRun(CyclicRun):
             scales = segment_scales(len(sensors), place_membrane(self.rig), self.rig.sim.thickness)
             for sensor, f in zip(sensors, scales):
                 self.control.set_scale(sensor, f)
-        super().advance(max_steps)
+        super().advance(max_steps or self._steps_to_watch())
+
+    def _steps_to_watch(self):
+        """While loading: at most the steps in which the platen, at its largest speed,
+        travels a quarter of softening_strain (check_stalled runs after each run of the
+        engine, so a softening specimen is caught within 1.25 x softening_strain); else
+        None (a control buffer)."""
+        s, p, c = self.s, self.rig.params, self.control
+        if s.phase not in ("loading", "cyclic"):
+            return None
+        v = c.get(self.ids.profile if c.get(self.ids.profile, "active") else self.ids.sine, "v_max")
+        n = int(0.25 * p.softening_strain * self.rig.height() / (v * self.rig.sim.dt))
+        return max(c.every, min(n, (c.capacity - 1) * c.every) // c.every * c.every)
 
     def on_window(self, controller):
         p, s, c = self.rig.params, self.s, self.control
@@ -173,16 +193,40 @@ class BiaxialRun(CyclicRun):
             for k in self.ids.sides:        # keep p; no more windows
                 c.set(k, window_steps=np.inf)
             c.set(self.ids.top, active=False)
-            if p.mode == "real_time":       # the sinusoid starts at p + q_min now
+            s.half_sample0 = len(self.samples["step"]) - 1
+            if p.mode == "real_time":       # the sinusoid starts at p + q_min now, the servo
+                self.rig.sim.set_density_scaling(     # alone (C not measured yet)
+                    self.rig.sim.scaled_timestep(p.realtime_added_inertia_max))
                 c.set(self.ids.sine, active=True, t0=self.rig.sim.time, half_periods=0,
-                      integral=0.0, compliance=s.compliance)
-                s.half_sample0 = len(self.samples["step"]) - 1
+                      integral=0.0, compliance=0.0, frequency=p.frequency_Hz)
             else:
-                c.set(self.ids.profile, active=True, direction=-1)
+                self._start_first_loading()
         elif s.windows >= p.consolidation_max_windows:
             raise RuntimeError(f"{s.phase} at {', '.join(f'{v / KPA:g}' for v in target)} kPa "
                                f"not reached within {s.windows} windows (last means "
                                f"{', '.join(f'{v / KPA:.2f}' for v in sig)} kPa)")
+
+    def _start_first_loading(self):
+        """Quasi-static: the first loading from p to p + q_max is the bound-to-bound profile
+        (the bound reached whatever the specimen's compliance, still unknown) at
+        platen_v_max_m_s, braking over the last braking_fraction of the range to
+        platen_v_min_m_s: the inertial-number bound's speed (0.05 m/s on the full-size
+        specimen, 10 x faster) sent a stress wave up to the bound at 0.2 % axial strain,
+        where this profile compresses the specimen by 2.6 %. The sinusoid takes over at its
+        peak."""
+        p, c = self.rig.params, self.control
+        p3 = p.confining_pressure_kPa * KPA
+        c.set(self.ids.profile, active=True, direction=-1, lo=p3 + p.deviator_min_kPa * KPA,
+              hi=p3 + p.deviator_max_kPa * KPA, v_min=p.platen_v_min_m_s,
+              v_max=p.platen_v_max_m_s, brake=p.braking_fraction)
+
+    def _first_loading_ended(self):
+        """The sinusoid takes over at its peak phase (half a period done), the servo alone
+        for the first unloading; _branch_ended sets its frequency."""
+        c, k = self.control, self.ids.sine
+        c.set(self.ids.profile, active=False)
+        c.set(k, active=True, half_periods=1, integral=0.0, compliance=0.0,
+              t0=self.rig.sim.time - 0.5 / c.get(k, "frequency"))
 
     def _at_rest(self):
         """Whether the axial strain rate since the last window is below
@@ -214,25 +258,67 @@ class BiaxialRun(CyclicRun):
 
     def on_peak(self):
         self._rescale()
-        self._feed_forward()
+        if self.control.get(self.ids.profile, "active"):
+            self._first_loading_ended()
+        self._branch_ended()
+        self.s.prev_half_sample0 = self.s.half_sample0
         self.s.half_sample0 = len(self.samples["step"]) - 1
 
-    def _feed_forward(self):
-        """Real time: the sinusoid's feed-forward compliance C = -dy/dsigma_1 of the platen
-        over the half cycle just ended (from the samples; a branch whose stress moved less
-        than a tenth of the amplitude keeps the last C), so the servo only corrects what C
-        does not foresee. Off with realtime_feed_forward false."""
+    def _branch_ended(self):
+        """What the rig learns from the half cycle just ended (from the samples): the
+        platen's compliance C = -dy/dsigma_1 of a loading or an unloading branch (they
+        differ: a loading one deforms plastically too; a branch whose stress moved less than
+        a tenth of the range, or none, keeps the last C) and, with realtime_feed_forward, for the next
+        branch the sinusoid's feed-forward -C d(target)/dt with the C of its kind (0 before
+        one was measured: the first unloading), so the servo only corrects what C does not
+        foresee, and the bound the branch before missed (its extreme comes late, in this
+        branch: the commanded bound moves by the miss; not the first loading's, which ran
+        without C). Quasi-static: the frequency of the bounds for the next branch's C (the
+        first unloading: the first loading's)."""
         p, s = self.rig.params, self.s
-        if p.mode != "real_time" or not p.realtime_feed_forward:
-            return
         k0, k1 = s.half_sample0, len(self.samples["step"]) - 1
         if k0 < 0 or k1 <= k0:
             return
-        y, sig = self.samples["platen_y"], self.samples["axial_stress"]
-        dsig = sig[k1] - sig[k0]
-        if abs(dsig) >= 0.1 * (p.deviator_max_kPa - p.deviator_min_kPa) * KPA:
-            s.compliance = max(0.0, -(y[k1] - y[k0]) / dsig)
-            self.control.set(self.ids.sine, compliance=s.compliance)
+        y, sig = self.samples["platen_y"], np.asarray(self.samples["axial_stress"][k0:k1 + 1])
+        dsig, dq = sig[-1] - sig[0], (p.deviator_max_kPa - p.deviator_min_kPa) * KPA
+        if abs(dsig) < 0.1 * dq:
+            return
+        loaded = int(dsig > 0.0)            # 1: a loading branch ended, an unloading follows
+        measured = -(y[k1] - y[k0]) / dsig
+        if measured > 0.0:                  # (else the platen did not follow: keep the last)
+            s.compliance[1 - loaded] = measured
+        following = s.compliance[loaded]
+        if p.realtime_feed_forward:
+            if s.prev_half_sample0 >= 0 and s.phase != "loading":
+                self._adapt_bound(self.samples["axial_stress"][s.prev_half_sample0:k1 + 1], not loaded)
+            self.control.set(self.ids.sine, compliance=following)
+        if p.mode == "quasi_static" and max(s.compliance) > 0.0:
+            self._set_frequency(self._quasi_static_frequency(following or s.compliance[1 - loaded]))
+
+    def _adapt_bound(self, sig, loading):
+        """Move the sinusoid's commanded bound (hi after a loading branch, lo after an
+        unloading) by what the branch missed its target by, within a quarter of the range
+        of the target."""
+        p, c, k = self.rig.params, self.control, self.ids.sine
+        sig3, dq = p.confining_pressure_kPa * KPA, (p.deviator_max_kPa - p.deviator_min_kPa) * KPA
+        name, target = (("hi", sig3 + p.deviator_max_kPa * KPA) if loading else
+                        ("lo", sig3 + p.deviator_min_kPa * KPA))
+        reached = np.max(sig) if loading else np.min(sig)
+        command = c.get(k, name) + target - reached
+        c.set(k, **{name: float(np.clip(command, target - 0.25 * dq, target + 0.25 * dq))})
+
+    def _set_frequency(self, f):
+        """A new frequency from this reversal on, the sinusoid's phase kept (t0 moved so that
+        its half periods so far end now)."""
+        c, k = self.control, self.ids.sine
+        c.set(k, frequency=f, t0=self.rig.sim.time - c.get(k, "half_periods") / (2.0 * f))
+
+    def _quasi_static_frequency(self, compliance):
+        """rig.biaxial.inertial.quasi_static_frequency for this specimen and loading."""
+        p, rig = self.rig.params, self.rig
+        return quasi_static_frequency(rig, compliance, p.confining_pressure_kPa * KPA,
+                                      (p.deviator_max_kPa - p.deviator_min_kPa) * KPA,
+                                      p.quasi_static_inertial_number, p.quasi_static_lag)
 
     def check_stalled(self):
         """A stress-controlled specimen that cannot carry sigma_1 = p + q_max fails, as in the
@@ -268,12 +354,16 @@ class BiaxialRun(CyclicRun):
         """The first trough after consolidation ends cycle 0 (N = 1 of a laboratory test: the
         first loading from p to p + q_max and the unloading to p + q_min)."""
         self._rescale()
-        self._feed_forward()
+        self.s.unloading_frequency = self.control.get(self.ids.sine, "frequency")
+        self._branch_ended()
         self.s.peak_stress = 0.0        # each loading branch is watched for softening anew
-        if self.s.phase == "loading":
-            self.s.phase = "cyclic"
+        s, k0, peak = self.s, self.s.cycle_sample0, self.s.half_sample0
+        if s.phase == "loading":
+            s.phase = "cyclic"
         super()._trough()
-        self.s.half_sample0 = len(self.samples["step"]) - 1    # after the cycle's thinning
+        every = max(1, int(self.rig.params.timeseries_every))     # after the cycle's thinning:
+        s.prev_half_sample0 = k0 + -(-(peak - k0) // every)        # the first kept at the peak or after
+        s.half_sample0 = len(self.samples["step"]) - 1
 
     def strains(self):
         """(axial, volumetric) strain since the end of consolidation, compression +."""
@@ -293,7 +383,8 @@ class BiaxialRun(CyclicRun):
                     width_at_end=rig.width(),
                     width_max_at_end=float(np.max(rig.side_x("right") - rig.side_x("left"))),
                     elements_broken_tension=int(np.sum(modes == "tension")),
-                    elements_broken_shear=int(np.sum(modes == "shear")))
+                    elements_broken_shear=int(np.sum(modes == "shear")),
+                    inertia_added=rig.sim.added_inertia(), loading_frequency=s.unloading_frequency)
 
     def on_cycle_end(self):
         if self.s.cycle % self.checkpoint_every == 0:

@@ -36,9 +36,12 @@ class BiaxialParams(DepositionParams):
     realtime_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo in real-time mode
     realtime_velocity_m_s: float = 0.05
     realtime_feed_forward: bool = True          # the servo plus -C dq/dt, C measured per half cycle
-    platen_v_max_m_s: float = 0.005
-    platen_v_min_m_s: float = 0.0005
-    braking_fraction: float = 0.25
+    quasi_static_inertial_number: float = 1.0e-3   # quasi-static f: the inertial number ...
+    quasi_static_lag: float = 0.1                   # ... and the stress's lag / (q_max - q_min)
+    platen_v_max_m_s: float = 0.005    # quasi-static first loading: the platen's speed ...
+    platen_v_min_m_s: float = 0.0005   # ... down to this at p + q_max ...
+    braking_fraction: float = 0.25     # ... over the last 25 % of the range
+    realtime_added_inertia_max: float = 0.01    # real time: density scaling adds at most this
     failure_axial_strain: float = 0.15   # a stress-controlled specimen beyond this has failed
     softening_strain: float = 0.02       # ... or once sigma_1 fell past its peak over this strain
     cycles: int = 100

@@ -62,7 +62,7 @@ def run_strength(rig, p_kPa, inertial_number=1e-3, axial_strain_max=0.10, side_g
     run = BiaxialRun(rig, cycles=1)
     while run.s.phase == "consolidation":
         run.advance()
-    d, rho = stone_size_and_density(rig)
+    d, rho = stone_size_and_density(rig, inertial=True)
     rate = inertial_strain_rate(inertial_number, d, rho, p_kPa * KPA)
     v = rate * run.s.height0
     for k in run.ids.sides:
@@ -70,7 +70,8 @@ def run_strength(rig, p_kPa, inertial_number=1e-3, axial_strain_max=0.10, side_g
         run.control.set(k, gain=sign * side_gain, v_max=max(prm.servo_velocity_m_s, 2.0 * v),
                         integral_steps=side_integral_steps)
     # the bound-to-bound profile at one speed towards a bound it never meets: constant v
-    run.control.set(run.ids.profile, lo=0.0, hi=1e30, v_min=v, v_max=v, direction=-1)
+    run.control.set(run.ids.sine, active=False)
+    run.control.set(run.ids.profile, lo=0.0, hi=1e30, v_min=v, v_max=v, direction=-1, active=True)
     k0, s0 = len(run.samples["step"]), rig.sim.step
     while run.s.phase != "done":
         run.advance()
