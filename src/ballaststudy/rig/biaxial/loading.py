@@ -269,12 +269,11 @@ class BiaxialRun(CyclicRun):
         platen's compliance C = -dy/dsigma_1 of a loading or an unloading branch (they
         differ: a loading one deforms plastically too; a branch whose stress moved less than
         a tenth of the range, or none, keeps the last C) and, with realtime_feed_forward, for the next
-        branch the sinusoid's feed-forward -C d(target)/dt with the C of its kind (0 before
-        one was measured: the first unloading), so the servo only corrects what C does not
+        branch the sinusoid's feed-forward -C d(target)/dt with the C of its kind (the
+        first unloading: the first loading's), so the servo only corrects what C does not
         foresee, and the bound the branch before missed (its extreme comes late, in this
         branch: the commanded bound moves by the miss; not the first loading's, which ran
-        without C). Quasi-static: the frequency of the bounds for the next branch's C (the
-        first unloading: the first loading's)."""
+        without C). Quasi-static: the frequency of the bounds for that C."""
         p, s = self.rig.params, self.s
         k0, k1 = s.half_sample0, len(self.samples["step"]) - 1
         if k0 < 0 or k1 <= k0:
@@ -287,13 +286,13 @@ class BiaxialRun(CyclicRun):
         measured = -(y[k1] - y[k0]) / dsig
         if measured > 0.0:                  # (else the platen did not follow: keep the last)
             s.compliance[1 - loaded] = measured
-        following = s.compliance[loaded]
+        following = s.compliance[loaded] or s.compliance[1 - loaded]
         if p.realtime_feed_forward:
             if s.prev_half_sample0 >= 0 and s.phase != "loading":
                 self._adapt_bound(self.samples["axial_stress"][s.prev_half_sample0:k1 + 1], not loaded)
             self.control.set(self.ids.sine, compliance=following)
         if p.mode == "quasi_static" and max(s.compliance) > 0.0:
-            self._set_frequency(self._quasi_static_frequency(following or s.compliance[1 - loaded]))
+            self._set_frequency(self._quasi_static_frequency(following))
 
     def _adapt_bound(self, sig, loading):
         """Move the sinusoid's commanded bound (hi after a loading branch, lo after an
