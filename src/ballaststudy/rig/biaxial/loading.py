@@ -272,8 +272,9 @@ class BiaxialRun(CyclicRun):
         branch the sinusoid's feed-forward -C d(target)/dt with the C of its kind (the
         first unloading: the first loading's), so the servo only corrects what C does not
         foresee, and the bound the branch before missed (its extreme comes late, in this
-        branch: the commanded bound moves by the miss; not the first loading's, which ran
-        without C). Quasi-static: the frequency of the bounds for that C."""
+        branch: the commanded bound moves by the miss; not cycle 0's, which ran without C or
+        with the other kind's: a miss the feed-forward then corrects anyway). Quasi-static:
+        the frequency of the bounds for that C."""
         p, s = self.rig.params, self.s
         k0, k1 = s.half_sample0, len(self.samples["step"]) - 1
         if k0 < 0 or k1 <= k0:
@@ -288,11 +289,21 @@ class BiaxialRun(CyclicRun):
             s.compliance[1 - loaded] = measured
         following = s.compliance[loaded] or s.compliance[1 - loaded]
         if p.realtime_feed_forward:
-            if s.prev_half_sample0 >= 0 and s.phase != "loading":
+            if s.cycle >= 1 + loaded:       # the branch before is not one of cycle 0
                 self._adapt_bound(self.samples["axial_stress"][s.prev_half_sample0:k1 + 1], not loaded)
             self.control.set(self.ids.sine, compliance=following)
         if p.mode == "quasi_static" and max(s.compliance) > 0.0:
             self._set_frequency(self._quasi_static_frequency(following))
+        self._platen_speed_limit(following, dq)
+
+    def _platen_speed_limit(self, compliance, dq):
+        """The sinusoid's speed limit: realtime_velocity_m_s, or twice the platen's largest
+        speed the sinusoid asks of this compliance, pi f C dq, if that is more (a soft
+        specimen at 20 Hz asks ~0.04 m/s of the full-size one: at the old fixed 0.05 m/s the
+        servo saturated and lost the bounds)."""
+        c, k = self.control, self.ids.sine
+        need = 2.0 * np.pi * c.get(k, "frequency") * compliance * dq
+        c.set(k, v_max=max(self.rig.params.realtime_velocity_m_s, float(need)))
 
     def _adapt_bound(self, sig, loading):
         """Move the sinusoid's commanded bound (hi after a loading branch, lo after an

@@ -41,7 +41,7 @@ class BiaxialParams(DepositionParams):
     platen_v_max_m_s: float = 0.005    # quasi-static first loading: the platen's speed ...
     platen_v_min_m_s: float = 0.0005   # ... down to this at p + q_max ...
     braking_fraction: float = 0.25     # ... over the last 25 % of the range
-    realtime_added_inertia_max: float = 0.01    # real time: density scaling adds at most this
+    realtime_added_inertia_max: float = 0.0     # real time: density scaling adds at most this
     failure_axial_strain: float = 0.15   # a stress-controlled specimen beyond this has failed
     softening_strain: float = 0.02       # ... or once sigma_1 fell past its peak over this strain
     cycles: int = 100
