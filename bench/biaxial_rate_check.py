@@ -1,6 +1,6 @@
-"""Side-by-side check of the cyclic biaxial rig's quasi-static loading: is the config's
-platen speed profile (with density scaling) slow enough, and could it be faster? Does a
-faster setting change the behaviours beyond the case-to-case scatter?
+"""Side-by-side check of the cyclic biaxial rig's quasi-static loading: is the frequency its
+bounds set (rig/biaxial/inertial.py, with density scaling) slow enough? Does it change the
+behaviours beyond the case-to-case scatter of a ten times slower reference?
 
     NUMBA_NUM_THREADS=1 python bench/biaxial_rate_check.py [--seeds 3] [--cycles 10]
         [--width 0.15] [--height 0.30] [--deviator-max 60] [--jobs 2]
@@ -10,13 +10,10 @@ faster setting change the behaviours beyond the case-to-case scatter?
 Specimen: the rig parameters are the config's (rig.biaxial) with --width/--height; without
 --library the small one of tests/rig (a synthetic library of 24 coarse stones, r0 = 8 mm,
 and the tests' shortened assembly/consolidation: fill_area_ratio 0.9, relax_steps 2000,
-consolidation_window_steps 1000), which runs in minutes. --deviator-max applies to both
-settings; default 60 kPa, the tests' value. Measured 2026-11-23 on the small specimen with
-the config's loading: it peaks at q = 495 / 383 kPa (seeds 1 / 2, far stronger than the
-full specimen's ~110 kPa: coarse synthetic stones), yet at q_max = 150 kPa the reference's
-first loading of seed 1 did not reach the bound within max_cycle_steps (it crept at
-sigma_1 ~ 51 kPa) and no element broke on either seed; at 60 kPa all seeds cycle. The
-defaults take ~3.5 min on 2 cores, nearly all of it the reference (~6 s vs 0.2 s a cycle).
+consolidation_window_steps 1000), which runs in minutes; the issue's check takes box_test's
+(--library results/bench_cache/box_test_bpm.nc, built by bench/biaxial_benchmark.py) at
+0.15 x 0.30 and 0.30 x 0.60 m. --deviator-max applies to both settings; default 60 kPa,
+the tests' value.
 
 Each seed is assembled once; the same assembled specimen is then consolidated and loaded
 with each setting (the setting's density scaling applies from consolidation on, as in a
