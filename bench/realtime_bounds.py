@@ -3,7 +3,7 @@ largest and smallest axial stress of each cycle against p + q_max and p + q_min.
 
     NUMBA_NUM_THREADS=1 python bench/realtime_bounds.py [--frequencies 5 20 60] [--cycles 5]
         [--seed 1] [--width 0.15 --height 0.30] [--deviator-min 15 --deviator-max 80]
-        [--library BPM.nc] [--config config/config.yaml] [--no-feed-forward]
+        [--library BPM.nc | --assembled RIG.nc] [--config config/config.yaml] [--no-feed-forward]
 
 One specimen (box_test's library at the config's resolution, bench/case_benchmark.py, or
 --library) assembled once; each frequency consolidates and cycles a copy of it in
@@ -30,6 +30,7 @@ def main(argv=None):
     ap.add_argument("--deviator-min", type=float, default=15.0, metavar="KPA")
     ap.add_argument("--deviator-max", type=float, default=80.0, metavar="KPA")
     ap.add_argument("--library", help="a BPM.nc (default: box_test's, built once)")
+    ap.add_argument("--assembled", help="an assembled specimen (BiaxialRig.save) instead of assembling one")
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--no-feed-forward", action="store_true", help="the servo alone")
     a = ap.parse_args(argv)
@@ -45,13 +46,14 @@ def main(argv=None):
     cfg = load_config(a.config)
     params = params_from_config("biaxial", cfg.get("rig", {}))
     params.width_m, params.height_m = a.width, a.height
-    path = Path(tempfile.mkdtemp()) / "assembled.nc"
-    assemble_biaxial(load_library(a.library or box_test_library(a.config)), params, seed=a.seed).save(path)
+    path = a.assembled or Path(tempfile.mkdtemp()) / "assembled.nc"
+    if not a.assembled:
+        assemble_biaxial(load_library(a.library or box_test_library(a.config)), params, seed=a.seed).save(path)
     for f in a.frequencies:
         rig = BiaxialRig.load(path)
         rig.params = params_from_config("biaxial", cfg.get("rig", {}))
         p = rig.params
-        p.mode, p.frequency_Hz, p.realtime_feed_forward = "real_time", f, not a.no_feed_forward
+        p.mode, p.frequency_Hz, p.sine_feed_forward = "real_time", f, not a.no_feed_forward
         p.deviator_min_kPa, p.deviator_max_kPa = a.deviator_min, a.deviator_max
         t = time.perf_counter()
         run = BiaxialRun(rig, cycles=a.cycles).run()
@@ -60,7 +62,7 @@ def main(argv=None):
         top = np.array(run.cyc["axial_stress_max"]) / hi
         bottom = np.array(run.cyc["axial_stress_min"]) / lo
         worst = max(np.abs(top - 1).max(), np.abs(bottom - 1).max()) if top.size else float("nan")
-        print(f"f={f:g} Hz, feed-forward {p.realtime_feed_forward}: {time.perf_counter() - t:.0f} s, "
+        print(f"f={f:g} Hz, feed-forward {p.sine_feed_forward}: {time.perf_counter() - t:.0f} s, "
               f"{run.s.failure or 'no failure'}, compliance loading / unloading "
               f"{run.s.compliance[0]:.3g} / {run.s.compliance[1]:.3g} m/Pa")
         print(f"  max/(p+q_max) per cycle: {' '.join(f'{v:.3f}' for v in top)}")

@@ -111,7 +111,9 @@ def test_cycles_reach_bounds_with_confinement_held(cycled, tmp_path):
     hi = (p.confining_pressure_kPa + p.deviator_max_kPa) * KPA
     lo = (p.confining_pressure_kPa + p.deviator_min_kPa) * KPA
     top, bottom = np.array(c["axial_stress_max"]), np.array(c["axial_stress_min"])
-    assert top[0] >= hi           # the first loading: the profile, up to its bound
+    # cycle 0: the profile, to each bound (it reverses on a sample beyond it: the load
+    # cell's 0.5 ms mean lies near it)
+    assert abs(top[0] - hi) < 0.02 * (hi - lo) and abs(bottom[0] - lo) < 0.02 * (hi - lo)
     # then the sinusoid (its servo, feed-forward and adapted bounds), the last cycle closest
     assert np.all(np.abs(top - hi) < 0.1 * (hi - lo)) and np.all(np.abs(bottom - lo) < 0.1 * (hi - lo))
     assert abs(top[-1] - hi) < 0.02 * (hi - lo) and abs(bottom[-1] - lo) < 0.02 * (hi - lo)
@@ -146,7 +148,7 @@ def test_resume_is_identical(cycled, specimen, tmp_path):
     assert first.s.cycle == 1
     resumed = BiaxialRun.from_checkpoint(ck).run()
     for k in cycled.cyc:
-        assert np.array_equal(cycled.cyc[k], resumed.cyc[k]), k
+        assert np.array_equal(cycled.cyc[k], resumed.cyc[k], equal_nan=True), k
     assert cycled.s.rows == resumed.s.rows
     assert np.array_equal(cycled.rig.sim.balls.pos, resumed.rig.sim.balls.pos)
 
@@ -200,29 +202,34 @@ def test_case_cli_runs_the_biaxial_rig(small_library, tmp_path):
         prm = json.loads(ds.attrs["rig_params_json"])
         assert (prm["confining_pressure_kPa"], prm["deviator_max_kPa"]) == (20.0, 50.0)
         assert prm["frequency_Hz"] == 10.0 and prm["mode"] == "quasi_static"
-        assert ds["axial_stress_max"].values[0] >= 70e3     # the first loading to p + q_max
+        # the first loading to p + q_max (the profile reverses on a sample at the bound; the
+        # record, the load cell's 0.5 ms mean, lies up to 2 % below where a pulse ended it)
+        assert ds["axial_stress_max"].values[0] >= 0.98 * 70e3
     assert (tmp_path / "behaviours.png").is_file() and any((tmp_path / "vtk").iterdir())
 
 
 def test_real_time_mode_follows_the_frequency(specimen):
-    """Real-time mode at f = 20 Hz: the real masses but for the density scaling of the
-    smallest balls within realtime_added_inertia_max (1 % here, 0 by default: the run ends
-    at 0.5-1.5 % with the contacts it has then, and at a dt above the automatic one), each
-    cycle lasts
-    1/f within 1 % of simulated time, the measured axial stress oscillates at f within 1 %
-    (the best least-squares sinusoid over a grid of 0.8-1.2 f in 0.1 % steps: single
-    peaks are too noisy to time; cycles 1-3, after the start-up of cycle 0 from the
-    consolidated state), and swings over most of the commanded range: every cycle over 70 %
-    of it, the mean peak within 15 % of the commanded one (the driver does not servo the
-    stress, so single cycles lag or overshoot: measured peaks 0.84-1.26 of the range)."""
+    """Real-time mode at f = 20 Hz: cycle 0 (N = 1) is the bound-to-bound profile, as in
+    quasi-static mode; from its trough on the real masses but for the density scaling of
+    the smallest balls within realtime_added_inertia_max (1 % here, 0 by default: the run
+    ends at 0.5-1.5 % with the contacts it has then, and at a dt above the automatic one);
+    each later cycle lasts 1/f within 1 % of simulated time, the measured axial stress
+    oscillates at f within 1 % (the best least-squares sinusoid over a grid of 0.8-1.2 f in
+    0.1 % steps: single peaks are too noisy to time; cycles 1-3), and every cycle reaches
+    both bounds within 5 % of the range (the servo with the feed-forward of the measured
+    compliance: bench/realtime_bounds.py measures 0.2-1.6 % on the small box_test
+    specimen at 5-60 Hz; a sign or factor-of-two error in the feed-forward misses by tens
+    of %)."""
     rig = BiaxialRig.load(specimen)
     p = rig.params
     p.mode, p.frequency_Hz, p.realtime_added_inertia_max = "real_time", 20.0, 0.01
     run = BiaxialRun(rig, cycles=4).run()
     assert 0.005 < rig.sim.added_inertia() < 0.015
     assert rig.sim.dt > 1.05 * rig.sim.scaled_timestep(0.0)      # the automatic dt
-    periods = np.array(run.cyc["cycle_steps"]) * rig.sim.dt
+    periods = np.array(run.cyc["cycle_steps"][1:]) * rig.sim.dt
     np.testing.assert_allclose(periods, 1.0 / p.frequency_Hz, rtol=0.01)
+    assert np.isnan(run.cyc["loading_frequency"][0])
+    np.testing.assert_allclose(run.cyc["loading_frequency"][1:], p.frequency_Hz)
     keep = np.array(run.samples["cycle"]) >= 1
     t = np.array(run.samples["step"])[keep] * rig.sim.dt
     sig = np.array(run.samples["axial_stress"])[keep]
@@ -238,8 +245,7 @@ def test_real_time_mode_follows_the_frequency(specimen):
     hi = (p.confining_pressure_kPa + p.deviator_max_kPa) * KPA
     top = (np.array(run.cyc["axial_stress_max"]) - lo) / (hi - lo)      # fractions of the range
     bottom = (np.array(run.cyc["axial_stress_min"]) - lo) / (hi - lo)
-    assert np.all(top - bottom > 0.7), (top, bottom)
-    assert abs(top.mean() - 1.0) < 0.15 and abs(bottom.mean()) < 0.2, (top, bottom)
+    assert np.all(np.abs(top - 1.0) < 0.05) and np.all(np.abs(bottom) < 0.05), (top, bottom)
 
 
 @pytest.mark.parametrize("strain, soft, steps, why", [
@@ -351,7 +357,7 @@ def test_membrane_follows_the_platens_and_resumes_identically(membrane_specimen,
     first.advance(max_steps=200)
     resumed = BiaxialRun.from_checkpoint(ck).run()
     for k in full.cyc:
-        assert np.array_equal(full.cyc[k], resumed.cyc[k]), k
+        assert np.array_equal(full.cyc[k], resumed.cyc[k], equal_nan=True), k
     assert full.s.rows == resumed.s.rows
     assert np.array_equal(rig.sim.walls.seg, resumed.rig.sim.walls.seg)
 

@@ -20,6 +20,11 @@ from .specimen import BiaxialRig, place_membrane
 AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors (then the segments')
 # controllers: the side servos (two rigid walls, or one per membrane segment), then these
 ControllerIds = namedtuple("ControllerIds", "sides top profile sine segment_sensors")
+# sigma_1's records are the means over this interval, as a load cell read at 2 kHz records
+# it: a sample (one step's contact forces on the platen) carries single contacts' pulses, up
+# to ~5 % of p + q_max on the small specimen, that a lab load cell's bandwidth and the
+# platen's mass filter out; a 60 Hz sinusoid's peak reads 0.1 % of its range low
+LOAD_CELL_INTERVAL_S = 0.5e-3
 
 
 def segment_scales(n_groups, seg_len, t):
@@ -61,7 +66,7 @@ def biaxial_control(rig):
     profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=0.0, v_max=0.0, brake=0.0, direction=-1,
                        active=False)      # the strength test's constant speed (it sets it)
     sine = c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
-                  gain=p.realtime_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.realtime_velocity_m_s,
+                  gain=p.sine_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.sine_velocity_min_m_s,
                   integral_steps=p.servo_integral_steps, active=False)
     ids = ControllerIds(sides, s_top, profile, sine, sensors if lay.left_groups else [])
     return c.build(), ids
@@ -70,9 +75,10 @@ def biaxial_control(rig):
 CYCLE_FIELDS = {
     "cycle_end_step": ("1", "engine step at the end of the cycle"),
     "cycle_steps": ("1", "engine steps in the cycle"),
-    "axial_stress_max": ("Pa", "largest axial stress sigma_1 at the top platen in the cycle (2D: force / (width t))"),
+    "axial_stress_max": ("Pa", "largest axial stress sigma_1 at the top platen in the cycle (2D: force / "
+                         "(width t)), each value the mean over a hundredth of the cycle's duration"),
     "axial_stress_min": ("Pa", "smallest axial stress sigma_1 in the cycle's unloading (after its peak: "
-                         "cycle 0 starts from the consolidation's p)"),
+                         "cycle 0 starts from the consolidation's p), as axial_stress_max"),
     "confining_stress_mean": ("Pa", "mean side-wall stress sigma_3 over the cycle (2D: force / (height t))"),
     "height_at_end": ("m", "specimen height between the platens at the end of the cycle"),
     "width_at_end": ("m", "mean specimen width between the sides (area / height) at the end of the cycle"),
@@ -83,7 +89,8 @@ CYCLE_FIELDS = {
                       "cycle, as a fraction of their real mass"),
     "loading_frequency": ("Hz", "frequency of the sinusoidal deviator in the cycle's unloading "
                           "(real time: the test's; quasi-static: from the inertial-number and "
-                          "stress-wave bounds, rig.biaxial.inertial)"),
+                          "stress-wave bounds, rig.biaxial.inertial; NaN in cycle 0, the "
+                          "bound-to-bound profile)"),
 }
 
 
@@ -194,39 +201,37 @@ class BiaxialRun(CyclicRun):
                 c.set(k, window_steps=np.inf)
             c.set(self.ids.top, active=False)
             s.half_sample0 = len(self.samples["step"]) - 1
-            if p.mode == "real_time":       # the sinusoid starts at p + q_min now, the servo
-                self.rig.sim.set_density_scaling(     # alone (C not measured yet)
-                    self.rig.sim.scaled_timestep(p.realtime_added_inertia_max))
-                c.set(self.ids.sine, active=True, t0=self.rig.sim.time, half_periods=0,
-                      integral=0.0, compliance=0.0, frequency=p.frequency_Hz)
-            else:
-                self._start_first_loading()
+            self._start_first_loading()
         elif s.windows >= p.consolidation_max_windows:
             raise RuntimeError(f"{s.phase} at {', '.join(f'{v / KPA:g}' for v in target)} kPa "
                                f"not reached within {s.windows} windows (last means "
                                f"{', '.join(f'{v / KPA:.2f}' for v in sig)} kPa)")
 
     def _start_first_loading(self):
-        """Quasi-static: the first loading from p to p + q_max is the bound-to-bound profile
-        (the bound reached whatever the specimen's compliance, still unknown) at
-        platen_v_max_m_s, braking over the last braking_fraction of the range to
-        platen_v_min_m_s: the inertial-number bound's speed (0.05 m/s on the full-size
-        specimen, 10 x faster) sent a stress wave up to the bound at 0.2 % axial strain,
-        where this profile compresses the specimen by 2.6 %. The sinusoid takes over at its
-        peak."""
+        """The first cycle (N = 1), both modes: the bound-to-bound profile from p to p + q_max
+        and back to p + q_min (each bound reached whatever the specimen's compliance, still
+        unknown) at platen_v_max_m_s, braking over the last braking_fraction of the range to
+        platen_v_min_m_s. At 20 Hz the sinusoid's first loading of the full-size specimen
+        (a real-time quarter period for 2.6 % axial strain) reached 0.6 x p + q_max; its first
+        unloading with the first loading's compliance (plastic: 10 x the unloading's) lifted
+        the platen off the specimen. The inertial-number bound's speed (0.05 m/s on the
+        full-size specimen, 10 x this) sent a stress wave up to p + q_max at 0.2 % axial
+        strain, where this profile compresses it by 2.6 %."""
         p, c = self.rig.params, self.control
         p3 = p.confining_pressure_kPa * KPA
         c.set(self.ids.profile, active=True, direction=-1, lo=p3 + p.deviator_min_kPa * KPA,
               hi=p3 + p.deviator_max_kPa * KPA, v_min=p.platen_v_min_m_s,
               v_max=p.platen_v_max_m_s, brake=p.braking_fraction)
 
-    def _first_loading_ended(self):
-        """The sinusoid takes over at its peak phase (half a period done), the servo alone
-        for the first unloading; _branch_ended sets its frequency."""
-        c, k = self.control, self.ids.sine
+    def _first_cycle_ended(self):
+        """The sinusoid takes over at the first trough, from its trough phase; _branch_ended
+        then sets its frequency (quasi-static) and feed-forward. Real time: from here on the
+        test's f and (_trough, once cycle 0's records are made) the real masses but
+        realtime_added_inertia_max."""
+        c = self.control
         c.set(self.ids.profile, active=False)
-        c.set(k, active=True, half_periods=1, integral=0.0, compliance=0.0,
-              t0=self.rig.sim.time - 0.5 / c.get(k, "frequency"))
+        c.set(self.ids.sine, active=True, half_periods=0, integral=0.0, compliance=0.0,
+              t0=self.rig.sim.time)
 
     def _at_rest(self):
         """Whether the axial strain rate since the last window is below
@@ -258,8 +263,6 @@ class BiaxialRun(CyclicRun):
 
     def on_peak(self):
         self._rescale()
-        if self.control.get(self.ids.profile, "active"):
-            self._first_loading_ended()
         self._branch_ended()
         self.s.prev_half_sample0 = self.s.half_sample0
         self.s.half_sample0 = len(self.samples["step"]) - 1
@@ -268,13 +271,13 @@ class BiaxialRun(CyclicRun):
         """What the rig learns from the half cycle just ended (from the samples): the
         platen's compliance C = -dy/dsigma_1 of a loading or an unloading branch (they
         differ: a loading one deforms plastically too; a branch whose stress moved less than
-        a tenth of the range, or none, keeps the last C) and, with realtime_feed_forward, for the next
-        branch the sinusoid's feed-forward -C d(target)/dt with the C of its kind (the
-        first unloading: the first loading's), so the servo only corrects what C does not
-        foresee, and the bound the branch before missed (its extreme comes late, in this
-        branch: the commanded bound moves by the miss; not cycle 0's, which ran without C or
-        with the other kind's: a miss the feed-forward then corrects anyway). Quasi-static:
-        the frequency of the bounds for that C."""
+        a tenth of the range, or none, keeps the last C; the first unloading's C stands for
+        the reloadings' until one is measured: the virgin loading's is plastic) and, with
+        sine_feed_forward, for the next branch the sinusoid's feed-forward -C d(target)/dt
+        with the C of its kind, so the servo only corrects what C does not foresee, and the
+        bound the branch before missed (its extreme comes late, in this branch: the
+        commanded bound moves by the miss; not cycle 0's, the profile's). Quasi-static: the
+        frequency of the bounds for that C."""
         p, s = self.rig.params, self.s
         k0, k1 = s.half_sample0, len(self.samples["step"]) - 1
         if k0 < 0 or k1 <= k0:
@@ -287,8 +290,10 @@ class BiaxialRun(CyclicRun):
         measured = -(y[k1] - y[k0]) / dsig
         if measured > 0.0:                  # (else the platen did not follow: keep the last)
             s.compliance[1 - loaded] = measured
+        if s.phase == "loading" and not loaded:     # the first unloading: a reloading is not
+            s.compliance[0] = s.compliance[1]       # the virgin loading (plastic: 10 x softer)
         following = s.compliance[loaded] or s.compliance[1 - loaded]
-        if p.realtime_feed_forward:
+        if p.sine_feed_forward:
             if s.cycle >= 1 + loaded:       # the branch before is not one of cycle 0
                 self._adapt_bound(self.samples["axial_stress"][s.prev_half_sample0:k1 + 1], not loaded)
             self.control.set(self.ids.sine, compliance=following)
@@ -297,13 +302,13 @@ class BiaxialRun(CyclicRun):
         self._platen_speed_limit(following, dq)
 
     def _platen_speed_limit(self, compliance, dq):
-        """The sinusoid's speed limit: realtime_velocity_m_s, or twice the platen's largest
+        """The sinusoid's speed limit: sine_velocity_min_m_s, or twice the platen's largest
         speed the sinusoid asks of this compliance, pi f C dq, if that is more (a soft
         specimen at 20 Hz asks ~0.04 m/s of the full-size one: at the old fixed 0.05 m/s the
         servo saturated and lost the bounds)."""
         c, k = self.control, self.ids.sine
         need = 2.0 * np.pi * c.get(k, "frequency") * compliance * dq
-        c.set(k, v_max=max(self.rig.params.realtime_velocity_m_s, float(need)))
+        c.set(k, v_max=max(self.rig.params.sine_velocity_min_m_s, float(need)))
 
     def _adapt_bound(self, sig, loading):
         """Move the sinusoid's commanded bound (hi after a loading branch, lo after an
@@ -364,7 +369,10 @@ class BiaxialRun(CyclicRun):
         """The first trough after consolidation ends cycle 0 (N = 1 of a laboratory test: the
         first loading from p to p + q_max and the unloading to p + q_min)."""
         self._rescale()
-        self.s.unloading_frequency = self.control.get(self.ids.sine, "frequency")
+        first = self.s.phase == "loading"
+        self.s.unloading_frequency = np.nan if first else self.control.get(self.ids.sine, "frequency")
+        if first:
+            self._first_cycle_ended()
         self._branch_ended()
         self.s.peak_stress = 0.0        # each loading branch is watched for softening anew
         s, k0, peak = self.s, self.s.cycle_sample0, self.s.half_sample0
@@ -374,6 +382,9 @@ class BiaxialRun(CyclicRun):
         every = max(1, int(self.rig.params.timeseries_every))     # after the cycle's thinning:
         s.prev_half_sample0 = k0 + -(-(peak - k0) // every)        # the first kept at the peak or after
         s.half_sample0 = len(self.samples["step"]) - 1
+        p = self.rig.params
+        if first and p.mode == "real_time":
+            self.rig.sim.set_density_scaling(self.rig.sim.scaled_timestep(p.realtime_added_inertia_max))
 
     def strains(self):
         """(axial, volumetric) strain since the end of consolidation, compression +."""
@@ -384,8 +395,9 @@ class BiaxialRun(CyclicRun):
     def cycle_row(self):
         rig, s = self.rig, self.s
         modes = rig.sim.breakages()["mode"][s.log0:]
-        sig1 = self.cycle_samples("axial_stress")
-        unloading = sig1[max(0, s.peak_sample - s.cycle_sample0):]
+        sig1 = self._load_cell(self.cycle_samples("axial_stress"))
+        peak = s.peak_sample - s.cycle_sample0 - (len(self.cycle_samples("step")) - len(sig1)) // 2
+        unloading = sig1[min(max(0, peak), len(sig1) - 1):]     # (the window centred on it)
         sig3 = 0.5 * (self.cycle_samples("left_stress") + self.cycle_samples("right_stress"))
         return dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
                     axial_stress_max=float(sig1.max()), axial_stress_min=float(unloading.min()),
@@ -395,6 +407,12 @@ class BiaxialRun(CyclicRun):
                     elements_broken_tension=int(np.sum(modes == "tension")),
                     elements_broken_shear=int(np.sum(modes == "shear")),
                     inertia_added=rig.sim.added_inertia(), loading_frequency=s.unloading_frequency)
+
+    def _load_cell(self, sig):
+        """sigma_1 as a load cell records it: the running mean over LOAD_CELL_INTERVAL_S."""
+        n = int(round(LOAD_CELL_INTERVAL_S / (self.control.every * self.rig.sim.dt)))
+        n = min(max(1, n), len(sig))
+        return np.convolve(sig, np.ones(n) / n, mode="valid")
 
     def on_cycle_end(self):
         if self.s.cycle % self.checkpoint_every == 0:

@@ -33,12 +33,12 @@ class BiaxialParams(DepositionParams):
     consolidation_strain_rate_max_1_s: float = 2.0e-3  # ... with the specimen at rest
     mode: str = "quasi_static"         # or "real_time": true masses, sinusoidal q at f
     frequency_Hz: float = 20.0
-    realtime_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo in real-time mode
-    realtime_velocity_m_s: float = 0.05
-    realtime_feed_forward: bool = True          # the servo plus -C dq/dt, C measured per half cycle
+    sine_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo following the sinusoid (both modes)
+    sine_velocity_min_m_s: float = 0.05     # its speed limit: this, or 2 pi f C dq if more
+    sine_feed_forward: bool = True          # the servo plus -C dq/dt, C measured per branch
     quasi_static_inertial_number: float = 1.0e-3   # quasi-static f: the inertial number ...
     quasi_static_lag: float = 0.1                   # ... and the stress's lag / (q_max - q_min)
-    platen_v_max_m_s: float = 0.005    # quasi-static first loading: the platen's speed ...
+    platen_v_max_m_s: float = 0.005    # the first loading (both modes): the platen's speed ...
     platen_v_min_m_s: float = 0.0005   # ... down to this at p + q_max ...
     braking_fraction: float = 0.25     # ... over the last 25 % of the range
     realtime_added_inertia_max: float = 0.0     # real time: density scaling adds at most this
