@@ -61,8 +61,7 @@ def biaxial_control(rig):
     top = c.walls(lay.top, 1)
     s_top = c.servo(AXIAL, top, gain=p.servo_gain_m_s_per_kPa,
                     **{**servo, "v_max": p.consolidation_platen_velocity_m_s})
-    sig3 = p.confining_pressure_kPa * KPA
-    lo, hi = sig3 + p.deviator_min_kPa * KPA, sig3 + p.deviator_max_kPa * KPA
+    lo, hi = p.axial_bounds_Pa
     profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=0.0, v_max=0.0, brake=0.0, direction=-1,
                        active=False)      # the strength test's constant speed (it sets it)
     sine = c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
@@ -218,9 +217,8 @@ class BiaxialRun(CyclicRun):
         full-size specimen, 10 x this) sent a stress wave up to p + q_max at 0.2 % axial
         strain, where this profile compresses it by 2.6 %."""
         p, c = self.rig.params, self.control
-        p3 = p.confining_pressure_kPa * KPA
-        c.set(self.ids.profile, active=True, direction=-1, lo=p3 + p.deviator_min_kPa * KPA,
-              hi=p3 + p.deviator_max_kPa * KPA, v_min=p.platen_v_min_m_s,
+        lo, hi = p.axial_bounds_Pa
+        c.set(self.ids.profile, active=True, direction=-1, lo=lo, hi=hi, v_min=p.platen_v_min_m_s,
               v_max=p.platen_v_max_m_s, brake=p.braking_fraction)
 
     def _first_cycle_ended(self):
@@ -283,7 +281,7 @@ class BiaxialRun(CyclicRun):
         if k0 < 0 or k1 <= k0:
             return
         y, sig = self.samples["platen_y"], np.asarray(self.samples["axial_stress"][k0:k1 + 1])
-        dsig, dq = sig[-1] - sig[0], (p.deviator_max_kPa - p.deviator_min_kPa) * KPA
+        dsig, dq = sig[-1] - sig[0], p.deviator_range_Pa
         if abs(dsig) < 0.1 * dq:
             return
         loaded = int(dsig > 0.0)            # 1: a loading branch ended, an unloading follows
@@ -312,12 +310,12 @@ class BiaxialRun(CyclicRun):
 
     def _adapt_bound(self, sig, loading):
         """Move the sinusoid's commanded bound (hi after a loading branch, lo after an
-        unloading) by what the branch missed its target by, within a quarter of the range
-        of the target."""
+        unloading) by what the branch missed its target by (as the load cell reads it),
+        within a quarter of the range of the target."""
         p, c, k = self.rig.params, self.control, self.ids.sine
-        sig3, dq = p.confining_pressure_kPa * KPA, (p.deviator_max_kPa - p.deviator_min_kPa) * KPA
-        name, target = (("hi", sig3 + p.deviator_max_kPa * KPA) if loading else
-                        ("lo", sig3 + p.deviator_min_kPa * KPA))
+        dq, (lo, hi) = p.deviator_range_Pa, p.axial_bounds_Pa
+        name, target = ("hi", hi) if loading else ("lo", lo)
+        sig = self._load_cell(np.asarray(sig))
         reached = np.max(sig) if loading else np.min(sig)
         command = c.get(k, name) + target - reached
         c.set(k, **{name: float(np.clip(command, target - 0.25 * dq, target + 0.25 * dq))})
@@ -332,8 +330,8 @@ class BiaxialRun(CyclicRun):
         """rig.biaxial.inertial.quasi_static_frequency for this specimen and loading."""
         p, rig = self.rig.params, self.rig
         return quasi_static_frequency(rig, compliance, p.confining_pressure_kPa * KPA,
-                                      (p.deviator_max_kPa - p.deviator_min_kPa) * KPA,
-                                      p.quasi_static_inertial_number, p.quasi_static_lag)
+                                      p.deviator_range_Pa, p.quasi_static_inertial_number,
+                                      p.quasi_static_lag)
 
     def check_stalled(self):
         """A stress-controlled specimen that cannot carry sigma_1 = p + q_max fails, as in the

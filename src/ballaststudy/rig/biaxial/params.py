@@ -52,6 +52,17 @@ class BiaxialParams(DepositionParams):
     vtk_cycles: list = field(default_factory=lambda: [0, -1])
     max_cycle_steps: int = 5000000
 
+    @property
+    def axial_bounds_Pa(self):
+        """sigma_1's cycle bounds (p + q_min, p + q_max) [Pa]."""
+        p = self.confining_pressure_kPa * KPA
+        return p + self.deviator_min_kPa * KPA, p + self.deviator_max_kPa * KPA
+
+    @property
+    def deviator_range_Pa(self):
+        """q_max - q_min [Pa]."""
+        return (self.deviator_max_kPa - self.deviator_min_kPa) * KPA
+
     def take_conditions(self, c):
         """A measured test's loading conditions (``measured.importer.load_conditions``):
         p, the q bounds, f."""
