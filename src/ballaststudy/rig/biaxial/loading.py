@@ -13,7 +13,7 @@ from ...metrics.cycle import MetricsParams
 from ...metrics.strain import specimen_strains
 from ...metrics.void_ratio import SolidCache
 from ..cyclic import CycleState, CyclicRun
-from .inertial import quasi_static_frequency
+from .inertial import bulk_density, quasi_static_frequency, travel_time
 from .params import KPA
 from .specimen import BiaxialRig, place_membrane
 
@@ -65,7 +65,7 @@ def biaxial_control(rig):
     profile = c.cyclic(AXIAL, top, lo=lo, hi=hi, v_min=0.0, v_max=0.0, brake=0.0, direction=-1,
                        active=False)      # the strength test's constant speed (it sets it)
     sine = c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
-                  gain=p.sine_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.sine_velocity_min_m_s,
+                  gain=p.servo_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.sine_velocity_min_m_s,
                   integral_steps=p.servo_integral_steps, active=False)
     ids = ControllerIds(sides, s_top, profile, sine, sensors if lay.left_groups else [])
     return c.build(), ids
@@ -297,16 +297,24 @@ class BiaxialRun(CyclicRun):
             self.control.set(self.ids.sine, compliance=following)
         if p.mode == "quasi_static" and max(s.compliance) > 0.0:
             self._set_frequency(self._quasi_static_frequency(following))
-        self._platen_speed_limit(following, dq)
+        if following > 0.0:
+            self._sine_servo(following, dq)
 
-    def _platen_speed_limit(self, compliance, dq):
-        """The sinusoid's speed limit: sine_velocity_min_m_s, or twice the platen's largest
-        speed the sinusoid asks of this compliance, pi f C dq, if that is more (a soft
-        specimen at 20 Hz asks ~0.04 m/s of the full-size one: at the old fixed 0.05 m/s the
-        servo saturated and lost the bounds)."""
-        c, k = self.control, self.ids.sine
+    def _sine_servo(self, compliance, dq):
+        """The sinusoid's servo for the coming branch, from its compliance C: the gain
+        C / (sine_servo_time_waves t_w), so that the servo's time constant C / gain is that
+        many travel times t_w = sqrt(rho_b C H) of the stress wave (a servo faster than the
+        wave steers the top layer, not the specimen: 1.2 t_w lost the bounds on the small
+        box_test specimen, 0.9 t_w on the full-size one; one gain for both, tuned on the
+        small one, was 3.6 t_w on the full-size one and lagged 20 %); the speed limit
+        sine_velocity_min_m_s, or twice the platen's largest speed the sinusoid asks,
+        pi f C dq, if that is more (at a fixed 0.05 m/s the servo saturated on the full-size
+        specimen at 20 Hz)."""
+        p, c, k = self.rig.params, self.control, self.ids.sine
+        t_w = travel_time(bulk_density(self.rig), compliance, self.rig.height())
         need = 2.0 * np.pi * c.get(k, "frequency") * compliance * dq
-        c.set(k, v_max=max(self.rig.params.sine_velocity_min_m_s, float(need)))
+        c.set(k, gain=float(compliance / (p.sine_servo_time_waves * t_w)) * KPA,
+              v_max=max(p.sine_velocity_min_m_s, float(need)), integral=0.0)
 
     def _adapt_bound(self, sig, loading):
         """Move the sinusoid's commanded bound (hi after a loading branch, lo after an

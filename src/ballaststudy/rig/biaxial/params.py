@@ -33,7 +33,7 @@ class BiaxialParams(DepositionParams):
     consolidation_strain_rate_max_1_s: float = 2.0e-3  # ... with the specimen at rest
     mode: str = "quasi_static"         # or "real_time": true masses, sinusoidal q at f
     frequency_Hz: float = 20.0
-    sine_gain_m_s_per_kPa: float = 5.0e-4   # the platen's servo following the sinusoid (both modes)
+    sine_servo_time_waves: float = 2.0      # the sinusoid's servo: time constant C / gain in t_w
     sine_velocity_min_m_s: float = 0.05     # its speed limit: this, or 2 pi f C dq if more
     sine_feed_forward: bool = True          # the servo plus -C dq/dt, C measured per branch
     quasi_static_inertial_number: float = 1.0e-3   # quasi-static f: the inertial number ...
