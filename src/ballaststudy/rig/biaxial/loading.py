@@ -293,7 +293,7 @@ class BiaxialRun(CyclicRun):
         following = s.compliance[loaded] or s.compliance[1 - loaded]
         if p.sine_feed_forward:
             if s.cycle >= 1 + loaded:       # the branch before is not one of cycle 0
-                self._adapt_bound(self.samples["axial_stress"][s.prev_half_sample0:k1 + 1], not loaded)
+                self._adapt_bound(s.prev_half_sample0, k1, not loaded)
             self.control.set(self.ids.sine, compliance=following)
         if p.mode == "quasi_static" and max(s.compliance) > 0.0:
             self._set_frequency(self._quasi_static_frequency(following))
@@ -316,14 +316,14 @@ class BiaxialRun(CyclicRun):
         c.set(k, gain=float(compliance / (p.sine_servo_time_waves * t_w)) * KPA,
               v_max=max(p.sine_velocity_min_m_s, float(need)), integral=0.0)
 
-    def _adapt_bound(self, sig, loading):
+    def _adapt_bound(self, k0, k1, loading):
         """Move the sinusoid's commanded bound (hi after a loading branch, lo after an
-        unloading) by what the branch missed its target by (as the load cell reads it),
-        within a quarter of the range of the target."""
+        unloading) by what the branch missed its target by (as the load cell reads it over
+        samples k0..k1), within a quarter of the range of the target."""
         p, c, k = self.rig.params, self.control, self.ids.sine
         dq, (lo, hi) = p.deviator_range_Pa, p.axial_bounds_Pa
         name, target = ("hi", hi) if loading else ("lo", lo)
-        sig = self._load_cell(np.asarray(sig))
+        sig = self._load_cell(self.samples["axial_stress"][k0:k1 + 1], self.samples["step"][k0:k1 + 1])
         reached = np.max(sig) if loading else np.min(sig)
         command = c.get(k, name) + target - reached
         c.set(k, **{name: float(np.clip(command, target - 0.25 * dq, target + 0.25 * dq))})
@@ -401,7 +401,7 @@ class BiaxialRun(CyclicRun):
     def cycle_row(self):
         rig, s = self.rig, self.s
         modes = rig.sim.breakages()["mode"][s.log0:]
-        sig1 = self._load_cell(self.cycle_samples("axial_stress"))
+        sig1 = self._load_cell(self.cycle_samples("axial_stress"), self.cycle_samples("step"))
         peak = s.peak_sample - s.cycle_sample0 - (len(self.cycle_samples("step")) - len(sig1)) // 2
         unloading = sig1[min(max(0, peak), len(sig1) - 1):]     # (the window centred on it)
         sig3 = 0.5 * (self.cycle_samples("left_stress") + self.cycle_samples("right_stress"))
@@ -414,9 +414,14 @@ class BiaxialRun(CyclicRun):
                     elements_broken_shear=int(np.sum(modes == "shear")),
                     inertia_added=rig.sim.added_inertia(), loading_frequency=s.unloading_frequency)
 
-    def _load_cell(self, sig):
-        """sigma_1 as a load cell records it: the running mean over LOAD_CELL_INTERVAL_S."""
-        n = int(round(LOAD_CELL_INTERVAL_S / (self.control.every * self.rig.sim.dt)))
+    def _load_cell(self, sig, steps):
+        """sigma_1 as a load cell records it: the running mean over LOAD_CELL_INTERVAL_S of
+        the samples at ``steps``, on the control steps (a finished cycle's samples are
+        thinned: interpolated between those kept)."""
+        every = self.control.every
+        grid = np.arange(steps[0], steps[-1] + 1, every)
+        sig = np.interp(grid, steps, sig)
+        n = int(round(LOAD_CELL_INTERVAL_S / (every * self.rig.sim.dt)))
         n = min(max(1, n), len(sig))
         return np.convolve(sig, np.ones(n) / n, mode="valid")
 
