@@ -275,7 +275,10 @@ class BiaxialRun(CyclicRun):
         with the C of its kind, so the servo only corrects what C does not foresee, and the
         bound the branch before missed (its extreme comes late, in this branch: the
         commanded bound moves by the miss; not cycle 0's, the profile's). Quasi-static: the
-        frequency of the bounds for that C."""
+        frequency of the bounds for the larger C of the two kinds (they hold for the whole
+        cycle; an unloading's C reads low while the specimen creeps down: with the coming
+        branch's C the frequency rose fourfold over 15 cycles of creep on a small specimen,
+        until it gave way)."""
         p, s = self.rig.params, self.s
         k0, k1 = s.half_sample0, len(self.samples["step"]) - 1
         if k0 < 0 or k1 <= k0:
@@ -296,7 +299,7 @@ class BiaxialRun(CyclicRun):
                 self._adapt_bound(s.prev_half_sample0, k1, not loaded)
             self.control.set(self.ids.sine, compliance=following)
         if p.mode == "quasi_static" and max(s.compliance) > 0.0:
-            self._set_frequency(self._quasi_static_frequency(following))
+            self._set_frequency(self._quasi_static_frequency(max(s.compliance)))
         if following > 0.0:
             self._sine_servo(following, dq)
 
