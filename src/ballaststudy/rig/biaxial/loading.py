@@ -1,6 +1,7 @@
 """Loading the biaxial specimen: the stress sensors and controllers (kit: dem.control),
-isotropic consolidation, a static deviator hold, and cycles of the deviator (quasi-static
-profile or real-time sinusoid) with the records of each cycle; the behaviours per cycle
+isotropic consolidation, a static deviator hold, and cycles of the deviator (cycle 0 the
+bound-to-bound profile, then a sinusoid at the test's f in real time or at the f of the
+quasi-static bounds) with the records of each cycle; the behaviours per cycle
 from ``ballaststudy.metrics.biaxial``, failure of a specimen that cannot carry p + q_max."""
 from collections import namedtuple
 from dataclasses import dataclass, field
@@ -66,7 +67,8 @@ def biaxial_control(rig):
                        active=False)      # the strength test's constant speed (it sets it)
     sine = c.sine(AXIAL, top, lo=lo, hi=hi, frequency=p.frequency_Hz,
                   gain=p.servo_gain_m_s_per_kPa, gain_unit=KPA, v_max=p.sine_velocity_min_m_s,
-                  integral_steps=p.servo_integral_steps, active=False)
+                  integral_steps=p.servo_integral_steps, active=False)  # gain and v_max: from
+                  # the compliance measured in cycle 0 (BiaxialRun._sine_servo) before it starts
     ids = ControllerIds(sides, s_top, profile, sine, sensors if lay.left_groups else [])
     return c.build(), ids
 
@@ -75,7 +77,7 @@ CYCLE_FIELDS = {
     "cycle_end_step": ("1", "engine step at the end of the cycle"),
     "cycle_steps": ("1", "engine steps in the cycle"),
     "axial_stress_max": ("Pa", "largest axial stress sigma_1 at the top platen in the cycle (2D: force / "
-                         "(width t)), each value the mean over a hundredth of the cycle's duration"),
+                         "(width t)), as a load cell records it: the running mean over 0.5 ms, LOAD_CELL_INTERVAL_S"),
     "axial_stress_min": ("Pa", "smallest axial stress sigma_1 in the cycle's unloading (after its peak: "
                          "cycle 0 starts from the consolidation's p), as axial_stress_max"),
     "confining_stress_mean": ("Pa", "mean side-wall stress sigma_3 over the cycle (2D: force / (height t))"),
@@ -312,7 +314,8 @@ class BiaxialRun(CyclicRun):
         small one, was 3.6 t_w on the full-size one and lagged 20 %); the speed limit
         sine_velocity_min_m_s, or twice the platen's largest speed the sinusoid asks,
         pi f C dq, if that is more (at a fixed 0.05 m/s the servo saturated on the full-size
-        specimen at 20 Hz)."""
+        specimen at 20 Hz); its integral starts anew (the last branch's, wound up by its lag,
+        held the next unloading 9 kPa above p + q_min on the full-size specimen)."""
         p, c, k = self.rig.params, self.control, self.ids.sine
         t_w = travel_time(bulk_density(self.rig), compliance, self.rig.height())
         need = 2.0 * np.pi * c.get(k, "frequency") * compliance * dq
