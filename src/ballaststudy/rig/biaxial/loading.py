@@ -309,9 +309,9 @@ class BiaxialRun(CyclicRun):
         """The sinusoid's servo for the coming branch, from its compliance C: the gain
         C / (sine_servo_time_waves t_w), so that the servo's time constant C / gain is that
         many travel times t_w = sqrt(rho_b C H) of the stress wave (a servo faster than the
-        wave steers the top layer, not the specimen: 1.2 t_w lost the bounds on the small
-        box_test specimen, 0.9 t_w on the full-size one; one gain for both, tuned on the
-        small one, was 3.6 t_w on the full-size one and lagged 20 %); the speed limit
+        wave steers the top layer, not the specimen: 1.1 t_w lost the bounds on the small
+        box_test specimen, 0.8 t_w on the full-size one; one gain for both, tuned on the
+        small one at 2.2 t_w, was 3.3 t_w on the full-size one and lagged 20 %); the speed limit
         sine_velocity_min_m_s, or twice the platen's largest speed the sinusoid asks,
         pi f C dq, if that is more (at a fixed 0.05 m/s the servo saturated on the full-size
         specimen at 20 Hz); its integral starts anew (the last branch's, wound up by its lag,
