@@ -40,7 +40,7 @@ def main(argv=None):
     import numpy as np
 
     from ballaststudy.config import load_config
-    from ballaststudy.rig.biaxial import KPA, BiaxialRig, BiaxialRun, assemble_biaxial
+    from ballaststudy.rig.biaxial import BiaxialRig, BiaxialRun, assemble_biaxial
     from ballaststudy.rig.kinds import params_from_config
     from ballaststudy.rig.library import load_library
     cfg = load_config(a.config)
@@ -57,8 +57,7 @@ def main(argv=None):
         p.deviator_min_kPa, p.deviator_max_kPa = a.deviator_min, a.deviator_max
         t = time.perf_counter()
         run = BiaxialRun(rig, cycles=a.cycles).run()
-        hi = (p.confining_pressure_kPa + p.deviator_max_kPa) * KPA
-        lo = (p.confining_pressure_kPa + p.deviator_min_kPa) * KPA
+        lo, hi = p.axial_bounds_Pa
         top = np.array(run.cyc["axial_stress_max"]) / hi
         bottom = np.array(run.cyc["axial_stress_min"]) / lo
         worst = max(np.abs(top - 1).max(), np.abs(bottom - 1).max()) if top.size else float("nan")
