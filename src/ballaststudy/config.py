@@ -29,7 +29,6 @@ ORDERED_PAIRS = (
     ("rig.box.loading", "cyclic_v_min_m_s", "cyclic_v_max_m_s", False),
     ("rig.box.assembly", "plate_width_m", "width_m", False),
     ("rig.biaxial.loading", "deviator_min_kPa", "deviator_max_kPa", True),
-    ("rig.biaxial.loading", "platen_v_min_m_s", "platen_v_max_m_s", False),
     ("bpm", "radius_min_mm", "radius_max_mm", False),
 )
 

@@ -55,6 +55,8 @@ def setup(small_library, tmp_path_factory):
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
     cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
+    cfg["rig"]["biaxial"]["loading"]["first_loading_inertial_number"] = 1.35e-4   # ~0.005 m/s: see
+    # tests/rig/test_biaxial.py (mechanics, not the config's quasi-static 1.5e-5)
     config = folder / "config.yaml"
     config.write_text(yaml.safe_dump(cfg))
     asm = folder / "assembled.nc"

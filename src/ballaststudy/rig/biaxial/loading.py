@@ -14,7 +14,7 @@ from ...metrics.cycle import MetricsParams
 from ...metrics.strain import specimen_strains
 from ...metrics.void_ratio import SolidCache
 from ..cyclic import CycleState, CyclicRun
-from .inertial import bulk_density, quasi_static_frequency, travel_time
+from .inertial import bulk_density, profile_speed, quasi_static_frequency, travel_time
 from .params import KPA
 from .specimen import BiaxialRig, place_membrane
 
@@ -211,17 +211,18 @@ class BiaxialRun(CyclicRun):
     def _start_first_loading(self):
         """The first cycle (N = 1), both modes: the bound-to-bound profile from p to p + q_max
         and back to p + q_min (each bound reached whatever the specimen's compliance, still
-        unknown) at platen_v_max_m_s, braking over the last braking_fraction of the range to
-        platen_v_min_m_s. At 20 Hz the sinusoid's first loading of the full-size specimen
-        (a real-time quarter period for 2.6 % axial strain) reached 0.6 x p + q_max; its first
-        unloading with the first loading's compliance (plastic: 10 x the unloading's) lifted
-        the platen off the specimen. The inertial-number bound's speed (0.05 m/s on the
-        full-size specimen, 10 x this) sent a stress wave up to p + q_max at 0.2 % axial
-        strain, where this profile compresses it by 2.6 %."""
+        unknown) at the platen speed of first_loading_inertial_number at p
+        (inertial.profile_speed: the virgin loading's strain depends on its rate down to
+        I ~ 2e-5), braking over the last braking_fraction of the range to braking_speed_ratio
+        of it. At 20 Hz the sinusoid's first loading of the full-size specimen (a real-time
+        quarter period for 2.6 % axial strain) reached 0.6 x p + q_max; its first unloading
+        with the first loading's compliance (plastic: 10 x the unloading's) lifted the platen
+        off the specimen."""
         p, c = self.rig.params, self.control
         lo, hi = p.axial_bounds_Pa
-        c.set(self.ids.profile, active=True, direction=-1, lo=lo, hi=hi, v_min=p.platen_v_min_m_s,
-              v_max=p.platen_v_max_m_s, brake=p.braking_fraction)
+        v = profile_speed(self.rig, p.first_loading_inertial_number, p.confining_pressure_kPa * KPA)
+        c.set(self.ids.profile, active=True, direction=-1, lo=lo, hi=hi, v_min=p.braking_speed_ratio * v,
+              v_max=v, brake=p.braking_fraction)
 
     def _first_cycle_ended(self):
         """The sinusoid takes over at the first trough, from its trough phase; _branch_ended
@@ -352,24 +353,25 @@ class BiaxialRun(CyclicRun):
         laboratory: its axial strain runs away. The run ends as a result, not an error, when
         the axial strain reaches failure_axial_strain, or sigma_1 (mean of the last 50
         samples) passed a peak below the bound and the specimen went on straining by
-        softening_strain (the peak strength of a strain-controlled test), or a loading to
-        p + q_max does not end within max_cycle_steps; ``failure`` says which, where and at
-        what stress."""
+        softening_strain (the peak strength of a strain-controlled test), or a cycle of the
+        sinusoid does not end within max_cycle_steps (not cycle 0: its profile moves the
+        platen on until the bound or failure_axial_strain, however many steps that takes at
+        its inertial number); ``failure`` says which, where and at what stress."""
         s, p = self.s, self.rig.params
         if s.phase not in ("loading", "cyclic"):
             return super().check_stalled()
         ea, sig1 = self.strains()[0], float(np.mean(self.samples["axial_stress"][-50:]))
         if sig1 > s.peak_stress:
             s.peak_stress, s.peak_strain = sig1, ea
-        steps = self.rig.sim.step - (s.loading_start_step if s.phase == "loading" else s.cycle_start_step)
+        steps = self.rig.sim.step - s.cycle_start_step
         if ea >= p.failure_axial_strain:
             why = f"axial strain {ea:.3f} reached failure_axial_strain {p.failure_axial_strain:g}"
         elif ea - s.peak_strain >= p.softening_strain and s.peak_sample < 0:
             why = (f"sigma_1 peaked at {s.peak_stress / KPA:.1f} kPa (axial strain {s.peak_strain:.4f}) "
                    f"and fell below it over a further softening_strain {p.softening_strain:g}")
-        elif steps > p.max_cycle_steps:
-            why = (f"sigma_1 did not reach p + q_max = {p.confining_pressure_kPa + p.deviator_max_kPa:g} "
-                   f"kPa within max_cycle_steps {p.max_cycle_steps} (axial strain {ea:.4f})")
+        elif s.phase == "cyclic" and steps > p.max_cycle_steps:
+            why = (f"the cycle between p + q_min and p + q_max = {p.confining_pressure_kPa + p.deviator_max_kPa:g} "
+                   f"kPa did not end within max_cycle_steps {p.max_cycle_steps} (axial strain {ea:.4f})")
         else:
             return
         where = "in the first loading" if s.phase == "loading" else f"in cycle {s.cycle}"
