@@ -6,9 +6,14 @@ volumetric strain, and at the peak q_peak, the friction angle phi_peak
 (sin phi = (sigma_1 - sigma_3) / (sigma_1 + sigma_3)) and the dilatancy angle psi
 (2D: sin psi = -r / (2 - r), r = d eps_v / d eps_a, compression positive).
 
-The rate is set by physics, not by cost (inertial.py): the strain rate of inertial number
-``inertial_number`` (config strength.inertial_number, 1e-3), with the quasi-static mode's
-density scaling (loading_dt_factor: inertia added to the smallest balls only)."""
+The rate is the strain rate of inertial number ``inertial_number`` (config
+strength.inertial_number, 1e-3; inertial.py), with the quasi-static mode's density scaling
+(loading_dt_factor: inertia added to the smallest balls only). That rate is not shown
+quasi-static: at p = 30 kPa one of two 0.15 x 0.30 m box_test specimens peaked at phi = 52
+and 42 deg at I = 1e-3 and 1e-4, the other at 62 deg at both (bench/strength_table.py). At
+1.5e-5 the first stopped at 2 % strain on a seating spike (sigma_1 159 kPa at 0.04 %,
+then 15 kPa) taken for its peak: check_stalled judges softening on the mean of 50 samples,
+about 1e-4 of strain at I = 1e-3 but 1e-6 at 1.5e-5."""
 from dataclasses import asdict, dataclass
 
 import numpy as np
