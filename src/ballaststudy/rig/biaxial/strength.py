@@ -11,9 +11,10 @@ strength.inertial_number, 1e-3; inertial.py), with the quasi-static mode's densi
 (loading_dt_factor: inertia added to the smallest balls only). That rate is not shown
 quasi-static: at p = 30 kPa one of two 0.15 x 0.30 m box_test specimens peaked at phi = 52
 and 42 deg at I = 1e-3 and 1e-4, the other at 62 deg at both (bench/strength_table.py). At
-1.5e-5 the first stopped at 2 % strain on a seating spike (sigma_1 159 kPa at 0.04 %,
-then 15 kPa) taken for its peak: check_stalled judges softening on the mean of 50 samples,
-about 1e-4 of strain at I = 1e-3 but 1e-6 at 1.5e-5."""
+1.5e-5 the first stopped at 2 % strain, past an early peak (sigma_1 159 kPa at 0.04 %, then
+a collapse to ~15 kPa) that the curve's 0.002-strain means, on which phi_peak is read, do
+not show: check_stalled judges softening on the mean of 50 samples, about 1e-4 of strain
+at I = 1e-3 but 1e-6 at 1.5e-5 (the stop and the peak must be read on one measure)."""
 from dataclasses import asdict, dataclass
 
 import numpy as np
