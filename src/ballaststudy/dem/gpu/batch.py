@@ -1,0 +1,306 @@
+"""A batch of independent 2D DEM cases stepped together on one GPU.
+
+``Batch.from_simulations(sims)`` copies B built ``Simulation`` s (balls, wall segments,
+contact table, gravity, dt) into one set of device arrays: the balls of all cases end to
+end with a case index, each case with its own dt, gravity, domain, cell grid, walls and
+contact coefficients. ``run(n)`` advances every case n steps (a few kernel launches per
+step, kernels.py); ``to_simulations(sims)`` writes the state back.
+
+What the batch holds today: balls (free or with held velocities, local damping, external
+loads), kinematic wall segments (constant velocity and spin), every contact law of
+``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU). Not yet:
+clumps, flat joints, controllers, automatic dt and density scaling, checkpoints: a
+simulation that uses one of them is refused (``BatchError``), never run differently.
+"""
+import math
+
+import numpy as np
+from numba import cuda
+
+from .. import params as P
+from ..state import Pairs, WallPairs
+from . import kernels as K
+
+BLOCK = 128
+MAX_NEIGHBOURS = 24     # full-list slots per ball (disks of size ratio <= 2 with a skin
+MAX_WALLS = 4           # of 0.25 d_max have at most ~15); overflow is an error, not a loss
+
+
+class BatchError(ValueError):
+    """A case the batch cannot run, or a case that failed while running."""
+
+
+def cuda_available():
+    """True if numba sees a CUDA GPU (or its simulator, NUMBA_ENABLE_CUDASIM=1)."""
+    try:
+        return bool(cuda.is_available())
+    except Exception:      # a driver that fails to load says the same thing
+        return False
+
+
+def _check(sim, k):
+    p = sim.prm
+    why = []
+    if len(sim.clumps):
+        why.append("clumps")
+    if len(sim.bonds) and sim.bonds.active.any():
+        why.append("flat joints")
+    if p[P.AUTO_DT] > 0.0 or p[P.DSCALE] > 0.0:
+        why.append("automatic dt or density scaling (give the Simulation a fixed dt)")
+    if p[P.DT] <= 0.0:
+        why.append("no dt")
+    if why:
+        raise BatchError(f"case {k}: the GPU batch does not hold {', '.join(why)} yet")
+
+
+class Batch:
+    """B cases on the GPU; see the module docstring."""
+
+    def __init__(self, law, host, n_cases, grid_cells, max_cell):
+        self.law = law
+        self.n_cases = n_cases
+        self.n_balls = host["pos"].shape[0]
+        self.n_segments = host["seg"].shape[0]
+        self.moving = int(np.any(host["wvel"] != 0.0) or np.any(host["womega"] != 0.0))
+        self.steps = 0
+        self._offsets = host.pop("offsets")
+        self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
+        width = host["nh"].shape[1]
+        if width > 8 or MAX_NEIGHBOURS > 64 or MAX_WALLS > 64:
+            raise BatchError("contact history wider than 8 columns: not in the GPU batch")
+        host["cell_n"] = np.zeros(grid_cells, np.int32)
+        host["cell_ids"] = np.full((grid_cells, max_cell), -1, np.int32)
+        self.d = {k: cuda.to_device(v) for k, v in host.items()}
+        self.k = K.kernels(law)
+
+    @classmethod
+    def from_simulations(cls, sims):
+        """Copy built simulations (same contact law) into one batch."""
+        if not sims:
+            raise BatchError("an empty batch")
+        law = sims[0]._layout
+        for k, s in enumerate(sims):
+            if s._layout != law:
+                raise BatchError(f"case {k}: another contact law than case 0's")
+            _check(s, k)
+            s._prepare()
+        return cls(law, *_pack(sims))
+
+    def _launch(self, name, n, *args):
+        if n > 0:
+            self.k[name][(n + BLOCK - 1) // BLOCK, BLOCK](*args)
+
+    def run(self, n_steps, check_every=1000):
+        """Advance every case ``n_steps`` steps; the error flags are read every
+        ``check_every`` steps and at the end (a failed case raises BatchError)."""
+        d = self.d
+        nb, ns, nc = self.n_balls, self.n_segments, self.n_cases
+        for k in range(n_steps):
+            self._launch("walls_step", ns, d["seg"], d["wvel"], d["womega"], d["centre"],
+                         d["wforce"], d["wmoment"], d["wcase"], d["travel"], d["cfg"],
+                         self.moving)
+            self._launch("first_half", nb, d["pos"], d["vel"], d["omega"], d["vend"],
+                         d["wend"], d["force"],
+                         d["minv"], d["iinv"], d["fix"], d["alive"], d["case"], d["pos0"],
+                         d["cfg"], d["maxd"])
+            self._launch("flag", nc, d["cfg"], d["maxd"], d["travel"], d["rebuild"])
+            self._launch("bin", nb, d["pos"], d["alive"], d["case"], d["cfg"], d["grid"],
+                         d["rebuild"], d["cell_n"], d["cell_ids"], d["bcell"], d["err"])
+            self._launch("build", nb, d["pos"], d["rad"], d["alive"], d["case"], d["cfg"],
+                         d["grid"], d["rebuild"], d["cell_n"], d["cell_ids"], d["nb"],
+                         d["nbn"], d["nh"], d["seg"], d["link"], d["wlo"], d["whi"],
+                         d["wl"], d["wln"], d["wh"], d["pos0"], d["err"])
+            self._launch("unbin", nb, d["alive"], d["case"], d["rebuild"], d["cell_n"],
+                         d["bcell"])
+            self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
+                         d["rad"], d["mass"],
+                         d["minv"], d["iinv"], d["fix"], d["damp"], d["mat"], d["alive"],
+                         d["case"], d["fext"], d["force"], d["cfg"], d["coef"], d["nb"],
+                         d["nbn"], d["nh"], d["seg"], d["link"], d["wvel"], d["womega"],
+                         d["centre"], d["wmat"], d["wl"], d["wln"], d["wh"], d["wforce"],
+                         d["wmoment"], d["err"])
+            self.steps += 1
+            if (k + 1) % check_every == 0 or k == n_steps - 1:
+                self._raise_errors()
+        return self
+
+    def _raise_errors(self):
+        err = self.d["err"].copy_to_host()
+        bad = np.nonzero(err)[0]
+        if len(bad):
+            b = int(bad[0])
+            text = "; ".join(t for bit, t in K.ERROR_TEXT.items() if err[b] & bit)
+            raise BatchError(f"case {b} failed by step {self.steps}: {text} "
+                             f"({len(bad)} case(s) failed)")
+
+    def synchronize(self):
+        cuda.synchronize()
+
+    def case_arrays(self, b, *names):
+        """Host copies of the named per-ball arrays of case b."""
+        lo, hi = self._offsets[b], self._offsets[b + 1]
+        return [self.d[n].copy_to_host()[lo:hi] for n in names]
+
+    def to_simulations(self, sims):
+        """Write positions, velocities, spins, forces, wall positions and reactions back
+        into the simulations the batch was made from (their step and time advance)."""
+        pos, vel, om, f = (self.d[n].copy_to_host() for n in ("pos", "vend", "wend", "force"))
+        seg, cen, wf, wm = (self.d[n].copy_to_host() for n in ("seg", "centre", "wforce",
+                                                                "wmoment"))
+        for b, s in enumerate(sims):
+            lo, hi = self._offsets[b], self._offsets[b + 1]
+            s.balls.pos[:] = pos[lo:hi]
+            s.balls.vel[:] = vel[lo:hi]
+            s.balls.omega[:] = om[lo:hi]
+            s.balls.force[:] = f[lo:hi, :2]
+            s.balls.moment[:] = f[lo:hi, 2]
+            w0, w1 = self._wall_offsets[b], self._wall_offsets[b + 1]
+            s.walls.seg[:] = seg[w0:w1]
+            s.walls.centre[:] = cen[w0:w1]
+            s.walls.force[:] = wf[w0:w1]
+            s.walls.moment[:] = wm[w0:w1]
+            s.cnt[0] += self.steps
+            s.prm[P.TIME] += self.steps * s.prm[P.DT]
+            self._lists_to_cpu(s, lo, hi, w0)
+        self.steps = 0
+
+    def _lists_to_cpu(self, sim, lo, hi, w0):
+        """The case's contacts and their history as the CPU's Verlet lists (i < j, grouped
+        by i), which its next rebuild (flagged here) carries over as its own."""
+        nb, nbn, nh, wl, wln, wh = (self.d[k].copy_to_host()[...] for k in
+                                    ("nb", "nbn", "nh", "wl", "wln", "wh"))
+        width = nh.shape[1]
+        slots = np.arange(MAX_NEIGHBOURS)
+        use = slots[None, :] < nbn[lo:hi, None]
+        i = np.broadcast_to(np.arange(lo, hi)[:, None], use.shape)
+        j = nb[lo:hi]
+        keep = use & (j > i)
+        rows = (i * MAX_NEIGHBOURS + slots[None, :])[keep]
+        pr = Pairs.empty(max(int(keep.sum()), 1), width)
+        pr.i[:keep.sum()] = i[keep] - lo
+        pr.j[:keep.sum()] = j[keep] - lo
+        pr.hist[:keep.sum()] = nh[rows]
+        pr.n[0] = keep.sum()
+        wslots = np.arange(MAX_WALLS)
+        wuse = wslots[None, :] < wln[lo:hi, None]
+        wi = np.broadcast_to(np.arange(lo, hi)[:, None], wuse.shape)
+        wp = WallPairs.empty(max(int(wuse.sum()), 1), width)
+        wp.i[:wuse.sum()] = wi[wuse] - lo
+        wp.s[:wuse.sum()] = wl[lo:hi][wuse] - w0
+        wp.hist[:wuse.sum()] = wh[(wi * MAX_WALLS + wslots[None, :])[wuse]]
+        wp.n[0] = wuse.sum()
+        sim.pairs, sim.wpairs = pr, wp
+        sim.cnt[2] = 1       # rebuilt (history carried) before the next CPU step
+
+
+def _pack(sims):
+    """Host arrays of the batch: the cases' balls and segments end to end."""
+    nball = [len(s.balls) for s in sims]
+    nseg = [len(s.walls) for s in sims]
+    offsets = np.concatenate([[0], np.cumsum(nball)]).astype(np.int64)
+    woff = np.concatenate([[0], np.cumsum(nseg)]).astype(np.int64)
+    def cat(name, part):
+        return np.ascontiguousarray(np.concatenate([getattr(getattr(s, part), name)
+                                                    for s in sims]))
+
+    h = {n: cat(n, "balls") for n in ("pos", "vel", "omega", "rad", "mass", "minv", "iinv",
+                                      "damp", "fext")}
+    h["fix"] = cat("fix", "balls").astype(np.int32)
+    h["mat"] = cat("mat", "balls").astype(np.int32)
+    h["alive"] = cat("alive", "balls").astype(np.uint8)
+    h["force"] = np.concatenate([np.column_stack([s.balls.force, s.balls.moment]) for s in sims])
+    h["case"] = np.repeat(np.arange(len(sims), dtype=np.int32), nball)
+    h["pos0"] = h["pos"].copy()
+    h["vend"] = h["vel"].copy()         # full-step velocities (vel: the half step's)
+    h["wend"] = h["omega"].copy()
+    n = len(h["case"])
+    width = max(int(sims[0].law.width), 1)
+    h["nb"] = np.full((n, MAX_NEIGHBOURS), -1, np.int32)
+    h["nbn"] = np.zeros(n, np.int32)
+    h["nh"] = np.zeros((n * MAX_NEIGHBOURS, width))
+    h["wl"] = np.full((n, MAX_WALLS), -1, np.int32)
+    h["wln"] = np.zeros(n, np.int32)
+    h["wh"] = np.zeros((n * MAX_WALLS, width))
+    h["bcell"] = np.zeros(n, np.int32)
+    for b, s in enumerate(sims):        # the CPU's contact history, carried by the first build
+        _rows_from_cpu(s, offsets[b], woff[b], h)
+    for name in ("seg", "vel", "omega", "centre", "mat"):
+        key = {"vel": "wvel", "omega": "womega", "mat": "wmat"}.get(name, name)
+        h[key] = np.ascontiguousarray(np.concatenate([getattr(s.walls, name) for s in sims]))
+    h["wmat"] = h["wmat"].astype(np.int32)
+    h["link"] = np.concatenate([np.where(s.walls.link >= 0, s.walls.link + woff[b], -1)
+                                for b, s in enumerate(sims)]).astype(np.int32).reshape(-1, 2)
+    h["wcase"] = np.repeat(np.arange(len(sims), dtype=np.int32), nseg)
+    h["wforce"] = np.zeros((woff[-1], 2))
+    h["wmoment"] = np.zeros(woff[-1])
+    h["wlo"] = woff[:-1].astype(np.int32)
+    h["whi"] = woff[1:].astype(np.int32)
+    cfg, grid, cells, max_cell = _grids(sims)
+    h["cfg"], h["grid"] = cfg, grid
+    nmat = max(s.coef.shape[0] for s in sims)
+    coef = np.zeros((len(sims), nmat, nmat, sims[0].coef.shape[2]))
+    for b, s in enumerate(sims):
+        m = s.coef.shape[0]
+        coef[b, :m, :m] = s.coef
+    h["coef"] = coef
+    h["maxd"] = np.zeros(len(sims))
+    h["travel"] = np.zeros(len(sims))
+    h["rebuild"] = np.full(len(sims), 2, np.int32)      # 2: build before the first forces
+    h["err"] = np.zeros(len(sims), np.int32)
+    h["offsets"] = offsets
+    return h, len(sims), cells, max_cell
+
+
+def _slots(rows):
+    """Order of ``rows`` grouped by row and each entry's slot in its row."""
+    order = np.argsort(rows, kind="stable")
+    r = rows[order]
+    return order, np.arange(len(r)) - np.searchsorted(r, r, "left")
+
+
+def _rows_from_cpu(sim, off, woff, h):
+    """Enter the CPU's Verlet lists (pairs i < j, ball-segment pairs) of one case, with
+    their history, into the batch's full per-ball rows."""
+    pr, wp = sim.pairs, sim.wpairs
+    n, m = int(pr.n[0]), int(wp.n[0])
+    a = np.concatenate([pr.i[:n], pr.j[:n]]).astype(np.int64)
+    o = np.concatenate([pr.j[:n], pr.i[:n]]).astype(np.int64)
+    hist = np.concatenate([pr.hist[:n], pr.hist[:n]])
+    for rows, other, hh, nb, nbn, nh, cap, shift in (
+            (a, o, hist, "nb", "nbn", "nh", MAX_NEIGHBOURS, off),
+            (wp.i[:m].astype(np.int64), wp.s[:m].astype(np.int64), wp.hist[:m], "wl", "wln",
+             "wh", MAX_WALLS, woff)):
+        order, slot = _slots(rows)
+        if len(slot) and slot.max() >= cap:
+            raise BatchError(f"a ball has more than {cap} listed neighbours ({nb})")
+        r = rows[order] + off
+        h[nb][r, slot] = other[order] + shift
+        h[nh][r * cap + slot] = hh[order]
+        h[nbn][off:off + len(sim.balls)] = np.bincount(rows, minlength=len(sim.balls))
+
+
+def _grids(sims):
+    """Per-case scalars (kernels.NCFG columns) and cell grids: cells of side 2 r_max +
+    skin over the case's domain, numbered after the previous cases' cells."""
+    cfg = np.zeros((len(sims), K.NCFG))
+    grid = np.zeros((len(sims), 3), np.int32)
+    start = 0
+    max_cell = 4
+    for b, s in enumerate(sims):
+        p = s.prm
+        live = s.balls.alive == 1
+        rmax = float(s.balls.rad[live].max())
+        rmin = float(s.balls.rad[live].min())
+        cs = 2.0 * rmax + p[P.SKIN]
+        x0, y0, x1, y1 = (p[P.XMIN], p[P.YMIN], p[P.XMAX], p[P.YMAX])
+        ncx = max(1, int(math.ceil((x1 - x0) / cs)))
+        ncy = max(1, int(math.ceil((y1 - y0) / cs)))
+        cfg[b] = (p[P.DT], p[P.GX], p[P.GY], p[P.THICK], p[P.SKIN], p[P.VMAX] ** 2,
+                  x0, y0, x1, y1, cs)
+        grid[b] = (ncx, ncy, start)
+        start += ncx * ncy
+        # the most disks of radius rmin whose centres fit one cell (a square lattice
+        # bound on the cell side + 2 rmin), with room for overlap
+        per_side = int((cs + 2.0 * rmin) / (2.0 * rmin * 0.9)) + 1
+        max_cell = max(max_cell, per_side * per_side)
+    return cfg, grid, start, max_cell

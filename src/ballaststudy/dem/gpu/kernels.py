@@ -1,0 +1,355 @@
+"""CUDA kernels of the batched engine: one thread per ball (or per case, per segment) of
+all cases at once, compiled per contact law (the packed law is a constant of the closure,
+as ``numba.literally`` makes it one on the CPU).
+
+The ball-ball force is computed by the contact law of the CPU engine
+(``submodels.contact_force``, called as a device function) from a FULL neighbour list:
+each ball's thread evaluates each of its contacts itself, with the bodies in the CPU's
+order (lower index = body i), and keeps its own copy of the contact's history. Both
+copies see the same inputs and evolve bit for bit alike, so action equals reaction
+exactly and no thread writes another ball's force (no atomics, no ordering between
+threads). It costs each contact twice; a half list would need atomics on both balls.
+
+One step, in launch order (each a kernel over the index named):
+  walls_step (segment): reset the reaction, move the segment, its travel since the build
+  first_half (ball): half kick (from the full-step velocity), drift, displacement since the build (atomic max per case)
+  flag (case): rebuild when 2 max|dx| + wall travel > skin (the CPU's list is rebuilt on
+      its own exact criterion: the build times differ, the forces do not)
+  bin, build, unbin (ball; cases flagged only): cell list, Verlet rows carrying history
+  forces (ball): contacts, walls, weight and load, local damping, half kick, guards
+"""
+import math
+
+from numba import cuda, njit
+from numba.core import config
+
+from ..integrate import _damped
+from ..neighbours import seg_closest
+from ..submodels import NCOEF, contact_force
+from ..walls import wall_contact_point
+
+# per-case scalar columns (``cfg``) and error bits (``err``)
+DT, GX, GY, THICK, SKIN, VMAX2, X0, Y0, X1, Y1, CELL = range(11)
+NCFG = 11
+ERR_NEIGHBOURS, ERR_CELL, ERR_WALLS, ERR_GUARD = 1, 2, 4, 8
+ERROR_TEXT = {ERR_NEIGHBOURS: "a ball has more neighbours than the list holds",
+              ERR_CELL: "a cell holds more balls than it has room for",
+              ERR_WALLS: "a ball is near more wall segments than its list holds",
+              ERR_GUARD: "NaN, runaway velocity or a ball left the domain"}
+
+
+@njit(cache=True, inline="always")
+def row(coef, b, ma, mb):
+    """Coefficient row of materials (ma, mb) of case b, as submodels.coefficient_row."""
+    return (coef[b, ma, mb, 0], coef[b, ma, mb, 1], coef[b, ma, mb, 2],
+            coef[b, ma, mb, 3], coef[b, ma, mb, 4], coef[b, ma, mb, 5],
+            coef[b, ma, mb, 6], coef[b, ma, mb, 7], coef[b, ma, mb, 8],
+            coef[b, ma, mb, 9], coef[b, ma, mb, 10], coef[b, ma, mb, 11])
+
+
+@njit(cache=True, inline="always")
+def cell_of(cfg, grid, b, x, y):
+    """Cell (cx, cy) of point (x, y) in case b's grid (clamped to it)."""
+    cs = cfg[b, CELL]
+    ncx = grid[b, 0]
+    ncy = grid[b, 1]
+    cx = min(max(int((x - cfg[b, X0]) / cs), 0), ncx - 1)
+    cy = min(max(int((y - cfg[b, Y0]) / cs), 0), ncy - 1)
+    return cx, cy
+
+
+if config.ENABLE_CUDASIM:
+    # numba's CUDA simulator runs the kernels as Python and hands them wrapped arrays,
+    # which compiled functions cannot take: give those the numpy arrays they wrap
+    from numba.cuda.simulator.cudadrv.devicearray import FakeWithinKernelCUDAArray
+
+    def _unwrapped(f):
+        def call(*args):
+            return f(*(a._item._ary if isinstance(a, FakeWithinKernelCUDAArray) else a
+                       for a in args))
+        return call
+
+    contact_force = _unwrapped(contact_force)
+    wall_contact_point = _unwrapped(wall_contact_point)
+    row = _unwrapped(row)
+    cell_of = _unwrapped(cell_of)
+
+_compiled = {}
+
+
+def kernels(law):
+    """The kernels for the packed contact law ``law`` (compiled once per law)."""
+    if law not in _compiled:
+        _compiled[law] = _make(law)
+    return _compiled[law]
+
+
+def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time constant)
+    assert NCOEF == 12
+
+    @cuda.jit
+    def walls_step(seg, wvel, womega, centre, wforce, wmoment, wcase, travel, cfg, moving):
+        s = cuda.grid(1)
+        if s >= seg.shape[0]:
+            return
+        wforce[s, 0] = 0.0
+        wforce[s, 1] = 0.0
+        wmoment[s] = 0.0
+        if moving == 0:
+            return
+        b = wcase[s]
+        dt = cfg[b, DT]
+        c = math.cos(womega[s] * dt)
+        sn = math.sin(womega[s] * dt)
+        dmax = 0.0
+        for e in range(2):
+            x = seg[s, 2 * e] - centre[s, 0]
+            y = seg[s, 2 * e + 1] - centre[s, 1]
+            nxp = centre[s, 0] + c * x - sn * y + wvel[s, 0] * dt
+            nyp = centre[s, 1] + sn * x + c * y + wvel[s, 1] * dt
+            dmax = max(dmax, math.sqrt((nxp - seg[s, 2 * e]) ** 2 + (nyp - seg[s, 2 * e + 1]) ** 2))
+            seg[s, 2 * e] = nxp
+            seg[s, 2 * e + 1] = nyp
+        centre[s, 0] += wvel[s, 0] * dt
+        centre[s, 1] += wvel[s, 1] * dt
+        cuda.atomic.add(travel, b, dmax)    # summed per segment: an upper bound
+
+    @cuda.jit
+    def first_half(pos, vel, omega, vend, wend, force, minv, iinv, fix, alive, case, pos0,
+                   cfg, maxd):
+        i = cuda.grid(1)
+        if i >= pos.shape[0] or alive[i] == 0:
+            return
+        b = case[i]
+        dt = cfg[b, DT]
+        h = 0.5 * dt
+        f = fix[i]
+        vel[i, 0] = vend[i, 0] if f & 1 else vend[i, 0] + h * force[i, 0] * minv[i]
+        vel[i, 1] = vend[i, 1] if f & 2 else vend[i, 1] + h * force[i, 1] * minv[i]
+        omega[i] = wend[i] if f & 4 else wend[i] + h * force[i, 2] * iinv[i]
+        pos[i, 0] += dt * vel[i, 0]
+        pos[i, 1] += dt * vel[i, 1]
+        dx = pos[i, 0] - pos0[i, 0]
+        dy = pos[i, 1] - pos0[i, 1]
+        cuda.atomic.max(maxd, b, dx * dx + dy * dy)
+
+    @cuda.jit
+    def flag(cfg, maxd, travel, rebuild):
+        b = cuda.grid(1)
+        if b >= rebuild.shape[0]:
+            return
+        if rebuild[b] == 2 or 2.0 * math.sqrt(maxd[b]) + travel[b] > cfg[b, SKIN]:
+            rebuild[b] = 1
+            maxd[b] = 0.0
+            travel[b] = 0.0
+        else:
+            rebuild[b] = 0
+
+    @cuda.jit
+    def bin_balls(pos, alive, case, cfg, grid, rebuild, cell_n, cell_ids, bcell, err):
+        i = cuda.grid(1)
+        if i >= pos.shape[0] or alive[i] == 0:
+            return
+        b = case[i]
+        if rebuild[b] == 0:
+            return
+        cx, cy = cell_of(cfg, grid, b, pos[i, 0], pos[i, 1])
+        c = grid[b, 2] + cy * grid[b, 0] + cx
+        bcell[i] = c
+        k = cuda.atomic.add(cell_n, c, 1)
+        if k < cell_ids.shape[1]:
+            cell_ids[c, k] = i
+        else:
+            cuda.atomic.or_(err, b, ERR_CELL)
+
+    @cuda.jit
+    def build(pos, rad, alive, case, cfg, grid, rebuild, cell_n, cell_ids, nb, nbn, nh,
+              seg, link, wlo, whi, wl, wln, wh, pos0, err):
+        i = cuda.grid(1)
+        if i >= pos.shape[0] or alive[i] == 0:
+            return
+        b = case[i]
+        if rebuild[b] == 0:
+            return
+        maxn = nb.shape[1]
+        width = nh.shape[1]
+        old = cuda.local.array(64, dtype=nb.dtype)
+        oldh = cuda.local.array((64, 8), dtype=nh.dtype)
+        n_old = nbn[i]
+        for k in range(n_old):
+            old[k] = nb[i, k]
+            for c in range(width):
+                oldh[k, c] = nh[i * maxn + k, c]
+        x = pos[i, 0]
+        y = pos[i, 1]
+        r = rad[i]
+        skin = cfg[b, SKIN]
+        cx, cy = cell_of(cfg, grid, b, x, y)
+        ncx = grid[b, 0]
+        ncy = grid[b, 1]
+        n = 0
+        for ey in range(max(cy - 1, 0), min(cy + 2, ncy)):
+            for ex in range(max(cx - 1, 0), min(cx + 2, ncx)):
+                c = grid[b, 2] + ey * ncx + ex
+                for q in range(min(cell_n[c], cell_ids.shape[1])):
+                    j = cell_ids[c, q]
+                    if j == i:
+                        continue
+                    dx = pos[j, 0] - x
+                    dy = pos[j, 1] - y
+                    lim = r + rad[j] + skin
+                    if dx * dx + dy * dy >= lim * lim:
+                        continue
+                    if n >= maxn:
+                        cuda.atomic.or_(err, b, ERR_NEIGHBOURS)
+                        continue
+                    nb[i, n] = j
+                    p = i * maxn + n
+                    for c2 in range(width):
+                        nh[p, c2] = 0.0
+                    for k in range(n_old):        # history carried over the rebuild
+                        if old[k] == j:
+                            for c2 in range(width):
+                                nh[p, c2] = oldh[k, c2]
+                            break
+                    n += 1
+        nbn[i] = n
+        # wall segments of the case: carry history the same way
+        maxw = wl.shape[1]
+        n_old = wln[i]
+        for k in range(n_old):
+            old[k] = wl[i, k]
+            for c in range(width):
+                oldh[k, c] = wh[i * maxw + k, c]
+        n = 0
+        for s in range(wlo[b], whi[b]):
+            px, py, u = seg_closest(x, y, seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+            lim = r + skin
+            if (x - px) ** 2 + (y - py) ** 2 >= lim * lim:
+                continue
+            if n >= maxw:
+                cuda.atomic.or_(err, b, ERR_WALLS)
+                continue
+            wl[i, n] = s
+            p = i * maxw + n
+            for c2 in range(width):
+                wh[p, c2] = 0.0
+            for k in range(n_old):
+                if old[k] == s:
+                    for c2 in range(width):
+                        wh[p, c2] = oldh[k, c2]
+                    break
+            n += 1
+        wln[i] = n
+        pos0[i, 0] = x
+        pos0[i, 1] = y
+
+    @cuda.jit
+    def unbin(alive, case, rebuild, cell_n, bcell):
+        i = cuda.grid(1)
+        if i >= alive.shape[0] or alive[i] == 0:
+            return
+        if rebuild[case[i]] != 0:
+            cell_n[bcell[i]] = 0
+
+    @cuda.jit
+    def forces(pos, vel, omega, vend, wend, rad, mass, minv, iinv, fix, damp, mat, alive,
+               case, fext, force, cfg, coef, nb, nbn, nh, seg, link, wvel, womega, centre, wmat, wl,
+               wln, wh, wforce, wmoment, err):
+        i = cuda.grid(1)
+        if i >= pos.shape[0] or alive[i] == 0:
+            return
+        b = case[i]
+        dt = cfg[b, DT]
+        thick = cfg[b, THICK]
+        fx = mass[i] * cfg[b, GX] + fext[i, 0]
+        fy = mass[i] * cfg[b, GY] + fext[i, 1]
+        mz = 0.0
+        maxn = nb.shape[1]
+        width = nh.shape[1]
+        xi = pos[i, 0]
+        yi = pos[i, 1]
+        ri = rad[i]
+        for k in range(nbn[i]):
+            j = nb[i, k]
+            p = i * maxn + k
+            lo = min(i, j)
+            hi = max(i, j)
+            dx = pos[hi, 0] - pos[lo, 0]
+            dy = pos[hi, 1] - pos[lo, 1]
+            d2 = dx * dx + dy * dy
+            rlo = rad[lo]
+            rhi = rad[hi]
+            rs = rlo + rhi
+            if d2 >= rs * rs:
+                for c in range(width):     # the contact opened: its history restarts
+                    nh[p, c] = 0.0
+                continue
+            d = math.sqrt(d2)
+            nx = dx / d
+            ny = dy / d
+            c = row(coef, b, mat[lo], mat[hi])
+            gx, gy, mlo, mhi, fn, ft, e1, e2, e3 = contact_force(
+                LAW, c, nx, ny, rs - d, vel[hi, 0] - vel[lo, 0], vel[hi, 1] - vel[lo, 1],
+                omega[lo], omega[hi], rlo, rhi, minv[lo], minv[hi], thick, dt, nh, p)
+            if i == hi:
+                fx += gx
+                fy += gy
+                mz += mhi
+            else:
+                fx -= gx
+                fy -= gy
+                mz += mlo
+        maxw = wl.shape[1]
+        for k in range(wln[i]):
+            s = wl[i, k]
+            q = i * maxw + k
+            px, py, d2 = wall_contact_point(pos, i, seg, link, s)
+            if d2 >= ri * ri or d2 == 0.0:
+                for c in range(width):
+                    wh[q, c] = 0.0
+                continue
+            d = math.sqrt(d2)
+            nx = (xi - px) / d
+            ny = (yi - py) / d
+            wx = wvel[s, 0] - womega[s] * (py - centre[s, 1])
+            wy = wvel[s, 1] + womega[s] * (px - centre[s, 0])
+            c = row(coef, b, wmat[s], mat[i])
+            gx, gy, mw, mb, fn, ft, e1, e2, e3 = contact_force(
+                LAW, c, nx, ny, ri - d, vel[i, 0] - wx, vel[i, 1] - wy, 0.0, omega[i],
+                0.0, ri, 0.0, minv[i], thick, dt, wh, q)
+            fx += gx
+            fy += gy
+            mz += mb
+            cuda.atomic.add(wforce, (s, 0), -gx)
+            cuda.atomic.add(wforce, (s, 1), -gy)
+            cuda.atomic.add(wmoment, s, -((px - centre[s, 0]) * gy - (py - centre[s, 1]) * gx))
+        f = fix[i]
+        alpha = damp[i]
+        if alpha > 0.0:
+            if not (f & 1):
+                fx = _damped(fx, vel[i, 0], alpha)
+            if not (f & 2):
+                fy = _damped(fy, vel[i, 1], alpha)
+            if not (f & 4):
+                mz = _damped(mz, omega[i], alpha)
+        force[i, 0] = fx
+        force[i, 1] = fy
+        force[i, 2] = mz
+        # the full-step velocity goes to vend/wend: vel/omega (the half step) are read by
+        # the threads of this ball's neighbours while this one runs
+        h = 0.5 * dt
+        vx = vel[i, 0] if f & 1 else vel[i, 0] + h * fx * minv[i]
+        vy = vel[i, 1] if f & 2 else vel[i, 1] + h * fy * minv[i]
+        wz = omega[i] if f & 4 else omega[i] + h * mz * iinv[i]
+        vend[i, 0] = vx
+        vend[i, 1] = vy
+        wend[i] = wz
+        v2 = vx * vx + vy * vy
+        ok = ((xi >= cfg[b, X0]) and (xi <= cfg[b, X1]) and (yi >= cfg[b, Y0])
+              and (yi <= cfg[b, Y1]) and (v2 <= cfg[b, VMAX2]) and abs(wz) < 1e300)
+        if not ok:
+            cuda.atomic.or_(err, b, ERR_GUARD)
+
+    return dict(walls_step=walls_step, first_half=first_half, flag=flag, bin=bin_balls,
+                build=build, unbin=unbin, forces=forces)
