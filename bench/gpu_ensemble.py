@@ -19,6 +19,8 @@ Needs a CUDA GPU and numba-cuda (``pip install -e '.[cuda]'``); prints one line 
    a first step (first neighbour build), the device synchronised before reading the clock;
    ball-steps/s = B n steps / s. The copies are identical cases: the work per step is that
    of B independent cases, which is what the throughput counts.
+   For B = 1, 100 and 1000, 100 more steps with each kernel timed alone (device
+   synchronised before and after it): where the step's time goes.
 5. What the GPU backend cannot run yet (biaxial and box rigs), printed as not measured.
 
 The last line is a table. A script that prints numbers, never a test.
@@ -89,7 +91,7 @@ def agreement(steps):
               flush=True)
 
 
-def gpu_throughput(n, steps, batches):
+def gpu_throughput(n, steps, batches, phases=(1, 100, 1000)):
     from ballaststudy.dem.gpu import Batch
     from numba import cuda
     rows = []
@@ -113,6 +115,11 @@ def gpu_throughput(n, steps, batches):
               f"({1e6 * t / steps:.1f} us/step); case 0 mean y {pos[:, 1].mean():.4f} m",
               flush=True)
         rows.append((nb, n, steps, t, bsps))
+        if nb in phases:           # each kernel timed alone (device synchronised around it)
+            batch.timer = {}
+            batch.run(100, check_every=100)
+            print(f"B={nb} phases (us/step, each launch synchronised): " + ", ".join(
+                f"{k} {1e4 * v:.0f}" for k, v in batch.timer.items()), flush=True)
         del batch
     return rows
 

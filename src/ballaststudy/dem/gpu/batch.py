@@ -13,6 +13,7 @@ clumps, flat joints, controllers, automatic dt and density scaling, checkpoints:
 simulation that uses one of them is refused (``BatchError``), never run differently.
 """
 import math
+import time
 
 import numpy as np
 from numba import cuda
@@ -65,13 +66,14 @@ class Batch:
         self.steps = 0
         self._offsets = host.pop("offsets")
         self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
-        width = host["nh"].shape[1]
-        if width > 8 or MAX_NEIGHBOURS > 64 or MAX_WALLS > 64:
-            raise BatchError("contact history wider than 8 columns: not in the GPU batch")
         host["cell_n"] = np.zeros(grid_cells, np.int32)
         host["cell_ids"] = np.full((grid_cells, max_cell), -1, np.int32)
         self.d = {k: cuda.to_device(v) for k, v in host.items()}
         self.k = K.kernels(law)
+        self.timer = None
+        self._build_lists()           # every case: the lists before the first forces
+        self._launch("unbin", self.n_balls, self.d["alive"], self.d["case"], self.d["need"],
+                      self.d["cell_n"], self.d["bcell"])
 
     @classmethod
     def from_simulations(cls, sims):
@@ -87,38 +89,48 @@ class Batch:
         return cls(law, *_pack(sims))
 
     def _launch(self, name, n, *args):
-        if n > 0:
-            self.k[name][(n + BLOCK - 1) // BLOCK, BLOCK](*args)
+        if n <= 0:
+            return
+        if self.timer is not None:       # phase timing (benchmarks): device synchronised
+            cuda.synchronize()
+            t0 = time.perf_counter()
+        self.k[name][(n + BLOCK - 1) // BLOCK, BLOCK](*args)
+        if self.timer is not None:
+            cuda.synchronize()
+            self.timer[name] = self.timer.get(name, 0.0) + time.perf_counter() - t0
+
+    def _build_lists(self):
+        """Cell list and Verlet rows of the cases whose ``need`` flag is set."""
+        d, nb = self.d, self.n_balls
+        self._launch("bin", nb, d["pos"], d["alive"], d["case"], d["cfg"], d["grid"],
+                     d["need"], d["cell_n"], d["cell_ids"], d["bcell"], d["err"])
+        self._launch("build", nb, d["pos"], d["rad"], d["alive"], d["case"], d["cfg"],
+                     d["grid"], d["need"], d["cell_n"], d["cell_ids"], d["nb"], d["nbn"],
+                     d["nh"], d["nb2"], d["nh2"], d["seg"], d["wlo"], d["whi"], d["wl"],
+                     d["wln"], d["wh"], d["wl2"], d["wh2"], d["pos0"], d["travel"],
+                     d["err"])
 
     def run(self, n_steps, check_every=1000):
         """Advance every case ``n_steps`` steps; the error flags are read every
-        ``check_every`` steps and at the end (a failed case raises BatchError)."""
+        ``check_every`` steps and at the end (a failed case raises BatchError).
+        With ``self.timer`` a dict, each kernel's time is added to it (slower)."""
         d = self.d
-        nb, ns, nc = self.n_balls, self.n_segments, self.n_cases
+        nb = self.n_balls
         for k in range(n_steps):
-            self._launch("walls_step", ns, d["seg"], d["wvel"], d["womega"], d["centre"],
-                         d["wforce"], d["wmoment"], d["wcase"], d["travel"], d["cfg"],
-                         self.moving)
+            self._launch("walls_step", max(self.n_segments, self.n_cases), d["seg"],
+                         d["wvel"], d["womega"], d["centre"], d["wforce"], d["wmoment"],
+                         d["wcase"], d["travel"], d["cfg"], self.moving, d["need"])
             self._launch("first_half", nb, d["pos"], d["vel"], d["omega"], d["vend"],
-                         d["wend"], d["force"],
-                         d["minv"], d["iinv"], d["fix"], d["alive"], d["case"], d["pos0"],
-                         d["cfg"], d["maxd"])
-            self._launch("flag", nc, d["cfg"], d["maxd"], d["travel"], d["rebuild"])
-            self._launch("bin", nb, d["pos"], d["alive"], d["case"], d["cfg"], d["grid"],
-                         d["rebuild"], d["cell_n"], d["cell_ids"], d["bcell"], d["err"])
-            self._launch("build", nb, d["pos"], d["rad"], d["alive"], d["case"], d["cfg"],
-                         d["grid"], d["rebuild"], d["cell_n"], d["cell_ids"], d["nb"],
-                         d["nbn"], d["nh"], d["seg"], d["link"], d["wlo"], d["whi"],
-                         d["wl"], d["wln"], d["wh"], d["pos0"], d["err"])
-            self._launch("unbin", nb, d["alive"], d["case"], d["rebuild"], d["cell_n"],
-                         d["bcell"])
+                         d["wend"], d["force"], d["minv"], d["iinv"], d["fix"], d["alive"],
+                         d["case"], d["pos0"], d["cfg"], d["travel"], d["need"])
+            self._build_lists()
             self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
-                         d["rad"], d["mass"],
-                         d["minv"], d["iinv"], d["fix"], d["damp"], d["mat"], d["alive"],
-                         d["case"], d["fext"], d["force"], d["cfg"], d["coef"], d["nb"],
-                         d["nbn"], d["nh"], d["seg"], d["link"], d["wvel"], d["womega"],
-                         d["centre"], d["wmat"], d["wl"], d["wln"], d["wh"], d["wforce"],
-                         d["wmoment"], d["err"])
+                         d["rad"], d["mass"], d["minv"], d["iinv"], d["fix"], d["damp"],
+                         d["mat"], d["alive"], d["case"], d["fext"], d["force"], d["cfg"],
+                         d["coef"], d["nb"], d["nbn"], d["nh"], d["seg"], d["link"],
+                         d["wvel"], d["womega"], d["centre"], d["wmat"], d["wl"], d["wln"],
+                         d["wh"], d["wforce"], d["wmoment"], d["need"], d["cell_n"],
+                         d["bcell"], d["err"])
             self.steps += 1
             if (k + 1) % check_every == 0 or k == n_steps - 1:
                 self._raise_errors()
@@ -170,12 +182,13 @@ class Batch:
         nb, nbn, nh, wl, wln, wh = (self.d[k].copy_to_host()[...] for k in
                                     ("nb", "nbn", "nh", "wl", "wln", "wh"))
         width = nh.shape[1]
+        total = nbn.shape[0]
         slots = np.arange(MAX_NEIGHBOURS)
         use = slots[None, :] < nbn[lo:hi, None]
         i = np.broadcast_to(np.arange(lo, hi)[:, None], use.shape)
-        j = nb[lo:hi]
+        j = nb[:, lo:hi].T
         keep = use & (j > i)
-        rows = (i * MAX_NEIGHBOURS + slots[None, :])[keep]
+        rows = (slots[None, :] * total + i)[keep]
         pr = Pairs.empty(max(int(keep.sum()), 1), width)
         pr.i[:keep.sum()] = i[keep] - lo
         pr.j[:keep.sum()] = j[keep] - lo
@@ -186,8 +199,8 @@ class Batch:
         wi = np.broadcast_to(np.arange(lo, hi)[:, None], wuse.shape)
         wp = WallPairs.empty(max(int(wuse.sum()), 1), width)
         wp.i[:wuse.sum()] = wi[wuse] - lo
-        wp.s[:wuse.sum()] = wl[lo:hi][wuse] - w0
-        wp.hist[:wuse.sum()] = wh[(wi * MAX_WALLS + wslots[None, :])[wuse]]
+        wp.s[:wuse.sum()] = wl[:, lo:hi].T[wuse] - w0
+        wp.hist[:wuse.sum()] = wh[(wslots[None, :] * total + wi)[wuse]]
         wp.n[0] = wuse.sum()
         sim.pairs, sim.wpairs = pr, wp
         sim.cnt[2] = 1       # rebuilt (history carried) before the next CPU step
@@ -215,13 +228,15 @@ def _pack(sims):
     h["wend"] = h["omega"].copy()
     n = len(h["case"])
     width = max(int(sims[0].law.width), 1)
-    h["nb"] = np.full((n, MAX_NEIGHBOURS), -1, np.int32)
+    h["nb"] = np.full((MAX_NEIGHBOURS, n), -1, np.int32)   # slot-major: see kernels.py
     h["nbn"] = np.zeros(n, np.int32)
     h["nh"] = np.zeros((n * MAX_NEIGHBOURS, width))
-    h["wl"] = np.full((n, MAX_WALLS), -1, np.int32)
+    h["wl"] = np.full((MAX_WALLS, n), -1, np.int32)
     h["wln"] = np.zeros(n, np.int32)
     h["wh"] = np.zeros((n * MAX_WALLS, width))
     h["bcell"] = np.zeros(n, np.int32)
+    for key in ("nb", "nh", "wl", "wh"):       # the build's new rows (kernels.build)
+        h[key + "2"] = np.zeros_like(h[key])
     for b, s in enumerate(sims):        # the CPU's contact history, carried by the first build
         _rows_from_cpu(s, offsets[b], woff[b], h)
     for name in ("seg", "vel", "omega", "centre", "mat"):
@@ -243,9 +258,8 @@ def _pack(sims):
         m = s.coef.shape[0]
         coef[b, :m, :m] = s.coef
     h["coef"] = coef
-    h["maxd"] = np.zeros(len(sims))
+    h["need"] = np.ones(len(sims), np.int32)     # build every case before the first step
     h["travel"] = np.zeros(len(sims))
-    h["rebuild"] = np.full(len(sims), 2, np.int32)      # 2: build before the first forces
     h["err"] = np.zeros(len(sims), np.int32)
     h["offsets"] = offsets
     return h, len(sims), cells, max_cell
@@ -266,6 +280,7 @@ def _rows_from_cpu(sim, off, woff, h):
     a = np.concatenate([pr.i[:n], pr.j[:n]]).astype(np.int64)
     o = np.concatenate([pr.j[:n], pr.i[:n]]).astype(np.int64)
     hist = np.concatenate([pr.hist[:n], pr.hist[:n]])
+    total = h["nbn"].shape[0]
     for rows, other, hh, nb, nbn, nh, cap, shift in (
             (a, o, hist, "nb", "nbn", "nh", MAX_NEIGHBOURS, off),
             (wp.i[:m].astype(np.int64), wp.s[:m].astype(np.int64), wp.hist[:m], "wl", "wln",
@@ -274,8 +289,8 @@ def _rows_from_cpu(sim, off, woff, h):
         if len(slot) and slot.max() >= cap:
             raise BatchError(f"a ball has more than {cap} listed neighbours ({nb})")
         r = rows[order] + off
-        h[nb][r, slot] = other[order] + shift
-        h[nh][r * cap + slot] = hh[order]
+        h[nb][slot, r] = other[order] + shift
+        h[nh][slot * total + r] = hh[order]
         h[nbn][off:off + len(sim.balls)] = np.bincount(rows, minlength=len(sim.balls))
 
 

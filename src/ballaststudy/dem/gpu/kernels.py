@@ -10,13 +10,21 @@ copies see the same inputs and evolve bit for bit alike, so action equals reacti
 exactly and no thread writes another ball's force (no atomics, no ordering between
 threads). It costs each contact twice; a half list would need atomics on both balls.
 
-One step, in launch order (each a kernel over the index named):
-  walls_step (segment): reset the reaction, move the segment, its travel since the build
-  first_half (ball): half kick (from the full-step velocity), drift, displacement since the build (atomic max per case)
-  flag (case): rebuild when 2 max|dx| + wall travel > skin (the CPU's list is rebuilt on
-      its own exact criterion: the build times differ, the forces do not)
-  bin, build, unbin (ball; cases flagged only): cell list, Verlet rows carrying history
-  forces (ball): contacts, walls, weight and load, local damping, half kick, guards
+Lists are slot-major (``nb[k, i]``, history row k N + i): the threads of a warp read
+adjacent rows.
+
+One step, in launch order (each a kernel over the index named); launches are few because
+each costs tens of microseconds of Python:
+  walls_step (segment; case): reset the reaction, move the segment, add its travel to the
+      case's; clear the case's rebuild flag
+  first_half (ball): half kick (from the full-step velocity), drift; a ball whose
+      displacement since the build, doubled, plus the wall travel exceeds the skin flags
+      its case (the CPU rebuilds on its own exact criterion: the build times differ, the
+      forces do not)
+  bin, build (ball; flagged cases only): cell list, Verlet rows carrying history
+  forces (ball): empty the cells of a rebuilt case, contacts, walls, weight and load,
+      local damping, half kick, guards
+(unbin empties the cells after the batch's first build, which precedes the first step.)
 """
 import math
 
@@ -25,7 +33,7 @@ from numba.core import config
 
 from ..integrate import _damped
 from ..neighbours import seg_closest
-from ..submodels import NCOEF, contact_force
+from ..submodels import NCOEF, WIDTH, contact_force, lf
 from ..walls import wall_contact_point
 
 # per-case scalar columns (``cfg``) and error bits (``err``)
@@ -86,10 +94,15 @@ def kernels(law):
 
 def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time constant)
     assert NCOEF == 12
+    HW = lf(LAW, WIDTH)       # history columns (reset when a contact opens); the
+    #                          persistent state after them is kept, as on the CPU
 
     @cuda.jit
-    def walls_step(seg, wvel, womega, centre, wforce, wmoment, wcase, travel, cfg, moving):
+    def walls_step(seg, wvel, womega, centre, wforce, wmoment, wcase, travel, cfg, moving,
+                   need):
         s = cuda.grid(1)
+        if s < need.shape[0]:
+            need[s] = 0       # this step's first_half flags the cases to rebuild
         if s >= seg.shape[0]:
             return
         wforce[s, 0] = 0.0
@@ -116,7 +129,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
 
     @cuda.jit
     def first_half(pos, vel, omega, vend, wend, force, minv, iinv, fix, alive, case, pos0,
-                   cfg, maxd):
+                   cfg, travel, need):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
@@ -131,27 +144,18 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         pos[i, 1] += dt * vel[i, 1]
         dx = pos[i, 0] - pos0[i, 0]
         dy = pos[i, 1] - pos0[i, 1]
-        cuda.atomic.max(maxd, b, dx * dx + dy * dy)
+        # a plain store of 1 from any ball that moved too far (an atomic max per ball
+        # over the case serialised the whole batch on a few addresses)
+        if 2.0 * math.sqrt(dx * dx + dy * dy) + travel[b] > cfg[b, SKIN]:
+            need[b] = 1
 
     @cuda.jit
-    def flag(cfg, maxd, travel, rebuild):
-        b = cuda.grid(1)
-        if b >= rebuild.shape[0]:
-            return
-        if rebuild[b] == 2 or 2.0 * math.sqrt(maxd[b]) + travel[b] > cfg[b, SKIN]:
-            rebuild[b] = 1
-            maxd[b] = 0.0
-            travel[b] = 0.0
-        else:
-            rebuild[b] = 0
-
-    @cuda.jit
-    def bin_balls(pos, alive, case, cfg, grid, rebuild, cell_n, cell_ids, bcell, err):
+    def bin_balls(pos, alive, case, cfg, grid, need, cell_n, cell_ids, bcell, err):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
         b = case[i]
-        if rebuild[b] == 0:
+        if need[b] == 0:
             return
         cx, cy = cell_of(cfg, grid, b, pos[i, 0], pos[i, 1])
         c = grid[b, 2] + cy * grid[b, 0] + cx
@@ -162,24 +166,43 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         else:
             cuda.atomic.or_(err, b, ERR_CELL)
 
+    @cuda.jit(device=True, inline=True)
+    def carried(ids, hist, n_old, i, nball, j, hist2, p, width):
+        """Row p of hist2 := the history ball i had with j in its old row (ids, hist),
+        zero if j was not listed."""
+        for c in range(width):
+            hist2[p, c] = 0.0
+        for k in range(n_old):
+            if ids[k, i] == j:
+                for c in range(width):
+                    hist2[p, c] = hist[k * nball + i, c]
+                return
+
+    @cuda.jit(device=True, inline=True)
+    def adopt(ids, hist, ids2, hist2, n, i, nball, width):
+        """Ball i's new row (ids2, hist2) becomes its row (ids, hist)."""
+        for k in range(n):
+            ids[k, i] = ids2[k, i]
+            for c in range(width):
+                hist[k * nball + i, c] = hist2[k * nball + i, c]
+
     @cuda.jit
-    def build(pos, rad, alive, case, cfg, grid, rebuild, cell_n, cell_ids, nb, nbn, nh,
-              seg, link, wlo, whi, wl, wln, wh, pos0, err):
+    def build(pos, rad, alive, case, cfg, grid, need, cell_n, cell_ids, nb, nbn, nh, nb2,
+              nh2, seg, wlo, whi, wl, wln, wh, wl2, wh2, pos0, travel, err):
+        """New rows are written beside the old ones (nb2, nh2; wl2, wh2), searched in
+        the old row for the history they carry, then copied over: each thread touches
+        its own rows only, in global memory (slot-major: coalesced)."""
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
         b = case[i]
-        if rebuild[b] == 0:
+        if need[b] == 0:
             return
-        maxn = nb.shape[1]
+        if i == 0 or case[i - 1] != b:
+            travel[b] = 0.0       # read by first_half only, before this kernel
+        maxn = nb.shape[0]
+        nball = nb.shape[1]
         width = nh.shape[1]
-        old = cuda.local.array(64, dtype=nb.dtype)
-        oldh = cuda.local.array((64, 8), dtype=nh.dtype)
-        n_old = nbn[i]
-        for k in range(n_old):
-            old[k] = nb[i, k]
-            for c in range(width):
-                oldh[k, c] = nh[i * maxn + k, c]
         x = pos[i, 0]
         y = pos[i, 1]
         r = rad[i]
@@ -187,6 +210,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         cx, cy = cell_of(cfg, grid, b, x, y)
         ncx = grid[b, 0]
         ncy = grid[b, 1]
+        n_old = nbn[i]
         n = 0
         for ey in range(max(cy - 1, 0), min(cy + 2, ncy)):
             for ex in range(max(cx - 1, 0), min(cx + 2, ncx)):
@@ -203,24 +227,13 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                     if n >= maxn:
                         cuda.atomic.or_(err, b, ERR_NEIGHBOURS)
                         continue
-                    nb[i, n] = j
-                    p = i * maxn + n
-                    for c2 in range(width):
-                        nh[p, c2] = 0.0
-                    for k in range(n_old):        # history carried over the rebuild
-                        if old[k] == j:
-                            for c2 in range(width):
-                                nh[p, c2] = oldh[k, c2]
-                            break
+                    nb2[n, i] = j
+                    carried(nb, nh, n_old, i, nball, j, nh2, n * nball + i, width)
                     n += 1
+        adopt(nb, nh, nb2, nh2, n, i, nball, width)
         nbn[i] = n
-        # wall segments of the case: carry history the same way
-        maxw = wl.shape[1]
+        maxw = wl.shape[0]        # the case's wall segments, the same way
         n_old = wln[i]
-        for k in range(n_old):
-            old[k] = wl[i, k]
-            for c in range(width):
-                oldh[k, c] = wh[i * maxw + k, c]
         n = 0
         for s in range(wlo[b], whi[b]):
             px, py, u = seg_closest(x, y, seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
@@ -230,49 +243,44 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             if n >= maxw:
                 cuda.atomic.or_(err, b, ERR_WALLS)
                 continue
-            wl[i, n] = s
-            p = i * maxw + n
-            for c2 in range(width):
-                wh[p, c2] = 0.0
-            for k in range(n_old):
-                if old[k] == s:
-                    for c2 in range(width):
-                        wh[p, c2] = oldh[k, c2]
-                    break
+            wl2[n, i] = s
+            carried(wl, wh, n_old, i, nball, s, wh2, n * nball + i, width)
             n += 1
+        adopt(wl, wh, wl2, wh2, n, i, nball, width)
         wln[i] = n
         pos0[i, 0] = x
         pos0[i, 1] = y
 
     @cuda.jit
-    def unbin(alive, case, rebuild, cell_n, bcell):
+    def unbin(alive, case, need, cell_n, bcell):
         i = cuda.grid(1)
         if i >= alive.shape[0] or alive[i] == 0:
             return
-        if rebuild[case[i]] != 0:
+        if need[case[i]] != 0:
             cell_n[bcell[i]] = 0
 
     @cuda.jit
     def forces(pos, vel, omega, vend, wend, rad, mass, minv, iinv, fix, damp, mat, alive,
                case, fext, force, cfg, coef, nb, nbn, nh, seg, link, wvel, womega, centre, wmat, wl,
-               wln, wh, wforce, wmoment, err):
+               wln, wh, wforce, wmoment, need, cell_n, bcell, err):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
         b = case[i]
+        if need[b] != 0:
+            cell_n[bcell[i]] = 0      # the build is done: empty the cells for the next one
         dt = cfg[b, DT]
         thick = cfg[b, THICK]
         fx = mass[i] * cfg[b, GX] + fext[i, 0]
         fy = mass[i] * cfg[b, GY] + fext[i, 1]
         mz = 0.0
-        maxn = nb.shape[1]
-        width = nh.shape[1]
+        nball = nb.shape[1]
         xi = pos[i, 0]
         yi = pos[i, 1]
         ri = rad[i]
         for k in range(nbn[i]):
-            j = nb[i, k]
-            p = i * maxn + k
+            j = nb[k, i]
+            p = k * nball + i
             lo = min(i, j)
             hi = max(i, j)
             dx = pos[hi, 0] - pos[lo, 0]
@@ -282,7 +290,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             rhi = rad[hi]
             rs = rlo + rhi
             if d2 >= rs * rs:
-                for c in range(width):     # the contact opened: its history restarts
+                for c in range(HW):        # the contact opened: its history restarts
                     nh[p, c] = 0.0
                 continue
             d = math.sqrt(d2)
@@ -300,13 +308,12 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                 fx -= gx
                 fy -= gy
                 mz += mlo
-        maxw = wl.shape[1]
         for k in range(wln[i]):
-            s = wl[i, k]
-            q = i * maxw + k
+            s = wl[k, i]
+            q = k * nball + i
             px, py, d2 = wall_contact_point(pos, i, seg, link, s)
             if d2 >= ri * ri or d2 == 0.0:
-                for c in range(width):
+                for c in range(HW):
                     wh[q, c] = 0.0
                 continue
             d = math.sqrt(d2)
@@ -351,5 +358,5 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         if not ok:
             cuda.atomic.or_(err, b, ERR_GUARD)
 
-    return dict(walls_step=walls_step, first_half=first_half, flag=flag, bin=bin_balls,
-                build=build, unbin=unbin, forces=forces)
+    return dict(walls_step=walls_step, first_half=first_half, bin=bin_balls, build=build,
+                unbin=unbin, forces=forces)

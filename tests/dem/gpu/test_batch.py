@@ -1,0 +1,134 @@
+"""The batched GPU engine (dem/gpu) under numba's CUDA simulator, against the CPU engine
+and against analytical results (physics spec cases 1-2)."""
+import copy
+import math
+
+import numpy as np
+import pytest
+
+from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation
+from ballaststudy.dem.gpu import Batch, BatchError
+
+W, RHO = 0.06, 2650.0
+
+
+def bed(n, seed, skin=2e-5, wall_speed=0.0):
+    """n disks of 4-8 mm settled by the CPU engine in a box of width W (hooke law of
+    settle2d); a small skin so that the lists are rebuilt within a few steps. With
+    ``wall_speed`` the right wall then moves inwards."""
+    rng = np.random.default_rng(seed)
+    cols = int(W / 0.0085)
+    k = np.arange(n)
+    x = (k % cols + 0.5) * 0.0085
+    y = (k // cols + 0.5) * 0.0085
+    r = rng.uniform(0.002, 0.004, n)
+    sim = Simulation(gravity=(0.0, -9.81), dt=2e-5, skin=skin, law="hooke", damping=0.1,
+                     hooke=dict(kn=1e6, kt=2e6 / 7, gamma_n=800.0, gamma_t=400.0, mu=0.5),
+                     domain=(-0.01, -0.01, W + 0.01, 0.3))
+    sim.add_balls(x, y, r, RHO, vx=rng.uniform(-0.3, 0.3, n), vy=rng.uniform(-0.3, 0.3, n))
+    sim.add_wall([(0.0, 0.25), (0.0, 0.0), (W, 0.0)], segments=2)
+    right = sim.add_wall([(W, 0.0), (W, 0.25)])
+    sim.run(8000)
+    sim.set_wall_velocity(right, (-wall_speed, 0.0))
+    return sim
+
+
+@pytest.fixture(scope="module")
+def beds():
+    return [bed(40, 1), bed(55, 2), bed(70, 3, wall_speed=0.05)]
+
+
+def batch_run(sims, steps):
+    sims = [copy.deepcopy(s) for s in sims]
+    Batch.from_simulations(sims).run(steps).to_simulations(sims)
+    return sims
+
+
+def test_batch_steps_like_the_cpu_engine(beds):
+    """Three settled beds (one with a moving wall), 12 steps with a skin that forces
+    rebuilds: positions, velocities, spins and wall reactions as on the CPU within
+    round-off, and the contacts' shear history carried over the rebuilds."""
+    cpu = [copy.deepcopy(s) for s in beds]
+    for s in cpu:
+        s.run(12)
+    gpu = batch_run(beds, 12)
+    for c, g in zip(cpu, gpu):
+        assert np.abs(c.balls.pos - g.balls.pos).max() < 1e-13
+        assert np.abs(c.balls.vel - g.balls.vel).max() < 1e-10
+        assert np.abs(c.balls.omega - g.balls.omega).max() < 1e-7
+        assert np.allclose(c.walls.force, g.walls.force, rtol=1e-9, atol=1e-9)
+        assert np.abs(c.walls.seg - g.walls.seg).max() < 1e-15
+        g.run(1)        # the exported lists: the CPU's rebuild carries their history
+        c.run(1)
+        key = lambda s: {(int(i), int(j)): s.pairs.hist[p]      # noqa: E731
+                         for p, (i, j) in enumerate(zip(s.pairs.i[:s.pairs.n[0]],
+                                                        s.pairs.j[:s.pairs.n[0]]))}
+        hc, hg = key(c), key(g)
+        shear = [k for k, v in hc.items() if np.any(v[:2] != 0.0)]
+        assert len(shear) > 30
+        for k in shear:
+            assert np.allclose(hc[k], hg[k], rtol=1e-6, atol=1e-15)
+
+
+def test_a_batch_equals_its_cases_one_by_one(beds):
+    together = batch_run(beds, 8)
+    for s, t in zip(beds, together):
+        alone = batch_run([s], 8)[0]
+        assert np.array_equal(alone.balls.pos, t.balls.pos)
+        assert np.array_equal(alone.balls.vel, t.balls.vel)
+
+
+def collision(wall, beta=0.3, E=1.0e8, R=0.01):
+    """A 1 m/s head-on impact (physics spec cases 1-2, PFC linear law, dashpot allowed to
+    pull) set up 10 um from contact; returns the simulation and (e, t_c) analytical."""
+    m = RHO * math.pi * R ** 2
+    mc, kn = (m, 2 * E) if wall else (m / 2, E)
+    w0 = math.sqrt(kn / mc)
+    e = math.exp(-math.pi * beta / math.sqrt(1 - beta ** 2))
+    tc = math.pi / (w0 * math.sqrt(1 - beta ** 2))
+    sim = Simulation(gravity=(0, 0), dt=tc / 200, domain=(-1, -1, 1, 1))
+    sim.set_contact_material(ContactMaterial(E=E, kappa=2.5, mu=0.5, beta_n=beta,
+                                             no_tension=False))
+    if wall:
+        sim.add_wall([(-0.5, 0.0), (0.5, 0.0)])
+        sim.add_balls(0.0, R + 1e-5, R, RHO, vy=-1.0)
+    else:
+        sim.add_balls([-R - 5e-6, R + 5e-6], [0, 0], [R, R], RHO, vx=[1.0, -1.0])
+    return sim, e, tc
+
+
+def test_impacts_restitution():
+    """Cases 1-2 of the physics spec in one batch: the restitution of a disk on a wall
+    and of two disks within 1 % of the spring-dashpot's exp(-pi beta / sqrt(1 - beta^2))."""
+    (sw, e_w, tc_w), (sp, e_p, tc_p) = collision(True), collision(False)
+    steps = int(1.6 * max(tc_w / sw.dt, tc_p / sp.dt))
+    batch_run_in_place = Batch.from_simulations([sw, sp])
+    batch_run_in_place.run(steps).to_simulations([sw, sp])
+    e_wall = sw.balls.vel[0, 1] / 1.0
+    e_pair = (sp.balls.vel[1, 0] - sp.balls.vel[0, 0]) / 2.0
+    assert abs(e_wall - e_w) < 0.01 * e_w, (e_wall, e_w)
+    assert abs(e_pair - e_p) < 0.01 * e_p, (e_pair, e_p)
+    assert abs(sp.balls.vel.sum(0)).max() < 1e-12      # momentum of the pair conserved
+
+
+def test_what_the_batch_does_not_hold_is_refused(beds):
+    s = copy.deepcopy(beds[0])
+    s.add_clump([0.03, 0.035], [0.2, 0.2], [0.003, 0.003], RHO)
+    with pytest.raises(BatchError, match="case 1: .*clumps"):
+        Batch.from_simulations([beds[1], s])
+    b = copy.deepcopy(beds[1])
+    b.balls.stone[:] = np.arange(len(b.balls)) // 4      # stones of four disks
+    b.install_flat_joints(FlatJointMaterial(E=1e7, sigma_c=2e4, c=2e4, gap_factor=1.5))
+    with pytest.raises(BatchError, match="flat joints"):
+        Batch.from_simulations([b])
+    auto = Simulation(gravity=(0, -9.81), domain=(-1, -1, 1, 1))
+    auto.add_balls(0.0, 0.0, 0.01, RHO)
+    with pytest.raises(BatchError, match="automatic dt"):
+        Batch.from_simulations([auto])
+
+
+def test_a_failed_case_is_named(beds):
+    s = copy.deepcopy(beds[1])
+    s.balls.vel[3] = (2e3, 0.0)          # beyond vmax: the guard trips
+    with pytest.raises(BatchError, match="case 1 failed by step 1: NaN, runaway"):
+        Batch.from_simulations([beds[0], s]).run(1)
