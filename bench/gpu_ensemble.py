@@ -80,6 +80,9 @@ def agreement(steps):
     batch = Batch.from_simulations(gpu)
     batch.run(steps)
     batch.to_simulations(gpu)
+    print("prepared launches: " + ", ".join(k for k, v in batch.prepared.items() if v)
+          + "; ordinary: " + ", ".join(k for k, v in batch.prepared.items() if not v),
+          flush=True)
     for c, g in zip(cpu, gpu):
         r = float(c.balls.rad.mean())
         dp = float(np.abs(c.balls.pos - g.balls.pos).max())
