@@ -73,15 +73,15 @@ def damp_kick(i, kin, fa, balls, h, dt):
     el = 0.0
     if alpha > 0.0:
         if not (f & 1):
-            fx = _damped(fa[i, 0], kin[i, 2], alpha)
+            fx = locally_damped(fa[i, 0], kin[i, 2], alpha)
             el -= (fx - fa[i, 0]) * kin[i, 2] * dt
             fa[i, 0] = fx
         if not (f & 2):
-            fy = _damped(fa[i, 1], kin[i, 3], alpha)
+            fy = locally_damped(fa[i, 1], kin[i, 3], alpha)
             el -= (fy - fa[i, 1]) * kin[i, 3] * dt
             fa[i, 1] = fy
         if not (f & 4):
-            mz = _damped(fa[i, 2], kin[i, 4], alpha)
+            mz = locally_damped(fa[i, 2], kin[i, 4], alpha)
             el -= (mz - fa[i, 2]) * kin[i, 4] * dt
             fa[i, 2] = mz
     _half_kick(i, kin, fa, balls, h)
@@ -186,7 +186,7 @@ def reset_forces(gx, gy, mass, fext, force, moment, clump, alive):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _damped(f, v, alpha):
+def locally_damped(f, v, alpha):
     """PFC local damping: F - alpha |F| sign(v)."""
     if v > 0.0:
         return f - alpha * abs(f)
@@ -232,9 +232,9 @@ def clumps_damp_kick(clumps, h, dt):
             continue
         alpha = clumps.damp[c]
         if alpha > 0.0:
-            fx = _damped(cforce[c, 0], cvel[c, 0], alpha)
-            fy = _damped(cforce[c, 1], cvel[c, 1], alpha)
-            mz = _damped(cmoment[c], comega[c], alpha)
+            fx = locally_damped(cforce[c, 0], cvel[c, 0], alpha)
+            fy = locally_damped(cforce[c, 1], cvel[c, 1], alpha)
+            mz = locally_damped(cmoment[c], comega[c], alpha)
             el -= ((fx - cforce[c, 0]) * cvel[c, 0] + (fy - cforce[c, 1]) * cvel[c, 1]
                    + (mz - cmoment[c]) * comega[c]) * dt
             cforce[c, 0] = fx

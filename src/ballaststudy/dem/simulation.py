@@ -420,7 +420,9 @@ class Simulation:
     def n_rebuilds(self):
         return int(self.cnt[1])
 
-    def _prepare(self):
+    def prepare(self):
+        """Make the model ready to step without stepping: skin, domain, Verlet lists
+        (history carried), the forces before the first step. Returns self."""
         p, b = self.prm, self.balls
         live = b.alive.astype(bool)
         if self.skin is None:
@@ -501,7 +503,7 @@ class Simulation:
     def _ball_springs(self):
         """Each ball's summed translational and rotational springs (integrate.ball_springs,
         the current Verlet lists and bonds)."""
-        self._prepare()
+        self.prepare()
         return springs(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
                                      self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
 
@@ -554,7 +556,7 @@ class Simulation:
         done = 0
         while done < n_steps:
             k = min(every, n_steps - done)
-            self._prepare()
+            self.prepare()
             status = self._run_kernel(k, ctl)
             if status == P.CONTROL_EVENT:
                 break

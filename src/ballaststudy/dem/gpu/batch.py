@@ -110,12 +110,12 @@ class Batch:
         """Copy built simulations (same contact law) into one batch."""
         if not sims:
             raise BatchError("an empty batch")
-        law = sims[0]._layout
+        law = sims[0].law.layout()
         for k, s in enumerate(sims):
-            if s._layout != law:
+            if s.law.layout() != law:
                 raise BatchError(f"case {k}: another contact law than case 0's")
             _check(s, k)
-            s._prepare()
+            s.prepare()
         return cls(law, *_pack(sims))
 
     def _launch(self, name, n, *args):

@@ -31,7 +31,7 @@ import math
 from numba import cuda, njit
 from numba.core import config
 
-from ..integrate import _damped
+from ..integrate import locally_damped
 from ..neighbours import seg_closest
 from ..submodels import NCOEF, WIDTH, contact_force, lf
 from ..walls import wall_contact_point
@@ -335,11 +335,11 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         alpha = damp[i]
         if alpha > 0.0:
             if not (f & 1):
-                fx = _damped(fx, vel[i, 0], alpha)
+                fx = locally_damped(fx, vel[i, 0], alpha)
             if not (f & 2):
-                fy = _damped(fy, vel[i, 1], alpha)
+                fy = locally_damped(fy, vel[i, 1], alpha)
             if not (f & 4):
-                mz = _damped(mz, omega[i], alpha)
+                mz = locally_damped(mz, omega[i], alpha)
         force[i, 0] = fx
         force[i, 1] = fy
         force[i, 2] = mz
