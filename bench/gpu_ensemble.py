@@ -7,8 +7,9 @@ Needs a CUDA GPU and numba-cuda (``pip install -e '.[cuda]'``); prints one line 
 2 without one. Prints, in this order:
 
 1. ``gpu=...``: the device and the numba / numba-cuda versions.
-2. Agreement with the CPU engine: three settle2d beds (300, 400, 500 disks) first settled
-   on the CPU, then advanced ``--check-steps`` steps on both engines from the same state;
+2. Agreement with the CPU engine: three settle2d beds (300, 400, 500 disks) and a bonded
+   one (400 disks in flat-jointed clusters, bench/engine_vs_lammps.py's variant) first
+   settled on the CPU, then advanced ``--check-steps`` steps on both engines from the same state;
    the largest position and velocity differences (round-off grows in a granular bed, so
    this is a check of the same physics, not of equal bits).
 3. The CPU engine's figure for one case (``--n`` disks, ``--cpu-steps`` steps from the
@@ -16,7 +17,8 @@ Needs a CUDA GPU and numba-cuda (``pip install -e '.[cuda]'``); prints one line 
    runs beside the GPU part (its JIT compile takes a minute on a cold cache).
 4. For each B: B copies of the settle2d case of ``--n`` disks (../shared/bench/README.md)
    stepped ``--steps`` steps from the lattice in one batch; wall-clock over the steps after
-   a first step (first neighbour build), the device synchronised before reading the clock;
+   a first step (first neighbour build), the device synchronised before reading the clock
+   (``--bonded-batches``: the same for the bonded variant);
    ball-steps/s = B n steps / s. The copies are identical cases: the work per step is that
    of B independent cases, which is what the throughput counts.
    For B = 1, 100 and 1000, 100 more steps with each kernel timed alone (device
@@ -69,8 +71,8 @@ def cpu_reference(proc):
 def agreement(steps):
     from ballaststudy.dem.gpu import Batch
     beds = []
-    for n in (300, 400, 500):
-        s = build(n)
+    for n, bonded in ((300, False), (400, False), (500, False), (400, True)):
+        s = build(n, bonded)
         s.run(6000)                      # settled on the CPU: a bed full of contacts
         beds.append(s)
     cpu = [copy.deepcopy(s) for s in beds]
@@ -88,18 +90,23 @@ def agreement(steps):
         dp = float(np.abs(c.balls.pos - g.balls.pos).max())
         dv = float(np.abs(c.balls.vel - g.balls.vel).max())
         vmax = float(np.abs(c.balls.vel).max())
+        bonds = ""
+        if len(c.bonds):
+            dfn = float(np.abs(c.bonds.fn - g.bonds.fn).max())
+            bonds = (f", {len(c.bonds)} flat joints: max|dF_n| {dfn:.3g} N (max {np.abs(c.bonds.fn).max():.3g}), "
+                     f"breakages {len(c.breakages()['step'])} / {len(g.breakages()['step'])}")
         print(f"agreement n={len(c.balls)} steps={steps}: max|dpos|={dp:.3g} m "
               f"({dp / r:.2g} R_mean), max|dvel|={dv:.3g} m/s (max|v| {vmax:.3g}), "
-              f"touching contacts {int((c.pairs.fn[:c.pairs.n[0]] != 0).sum())}",
+              f"touching contacts {int((c.pairs.fn[:c.pairs.n[0]] != 0).sum())}{bonds}",
               flush=True)
 
 
-def gpu_throughput(n, steps, batches, phases=(1, 100, 1000)):
+def gpu_throughput(n, steps, batches, phases=(1, 100, 1000), bonded=False):
     from ballaststudy.dem.gpu import Batch
     from numba import cuda
     rows = []
     for nb in batches:
-        sim = build(n)
+        sim = build(n, bonded)
         try:
             batch = Batch.from_simulations([sim] * nb)
             batch.run(1)
@@ -110,14 +117,15 @@ def gpu_throughput(n, steps, batches, phases=(1, 100, 1000)):
             t = time.perf_counter() - t0
         except Exception as exc:       # out of memory, a failed case: say so, go on
             print(f"B={nb}: failed: {exc}", flush=True)
-            rows.append((nb, n, steps, float("nan"), float("nan")))
+            rows.append((f"{nb}{' bonded' if bonded else ''}", n, steps, float("nan"),
+                         float("nan")))
             continue
         bsps = nb * n * steps / t
         pos = batch.case_arrays(0, "pos")[0]
-        print(f"B={nb}: {nb * n} balls, {steps} steps in {t:.3f} s: {bsps:.3g} ball-steps/s "
+        print(f"B={nb}{' bonded' if bonded else ''}: {nb * n} balls, {steps} steps in {t:.3f} s: {bsps:.3g} ball-steps/s "
               f"({1e6 * t / steps:.1f} us/step); case 0 mean y {pos[:, 1].mean():.4f} m",
               flush=True)
-        rows.append((nb, n, steps, t, bsps))
+        rows.append((f"{nb}{' bonded' if bonded else ''}", n, steps, t, bsps))
         if nb in phases:           # each kernel timed alone (device synchronised around it)
             batch.timer = {}
             batch.run(100, check_every=100)
@@ -132,6 +140,8 @@ def main():
     ap.add_argument("--n", type=int, default=5000)
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--batches", default="1,10,100,1000")
+    ap.add_argument("--bonded-batches", default="100",
+                    help="B of the bonded variant (bench/engine_vs_lammps.py's clusters)")
     ap.add_argument("--cpu-steps", type=int, default=2000)
     ap.add_argument("--check-steps", type=int, default=500)
     a = ap.parse_args()
@@ -159,16 +169,18 @@ def main():
     agreement(a.check_steps)
     print(f"# agreement (incl. CUDA compile): {time.perf_counter() - t0:.1f} s", flush=True)
     rows = gpu_throughput(a.n, a.steps, [int(b) for b in a.batches.split(",")])
+    rows += gpu_throughput(a.n, a.steps, [int(b) for b in a.bonded_batches.split(",") if b],
+                           phases=(), bonded=True)
     cpu = cpu_reference(proc)
     cpu_bsps = cpu["bsps"] if cpu else float("nan")
     print(f"cpu_engine_one_case_ball_steps_per_s={cpu_bsps:.3g} (n={a.n}, {a.cpu_steps} steps, "
           f"one thread)")
     print("not measured: 100 full-size biaxial specimens and the 160 thesis box cases "
-          "(the GPU batch holds no flat joints, clumps or controllers yet)")
+          "(the GPU batch holds no clumps or controllers yet)")
     print("| B | balls | steps | s | ball-steps/s | x CPU one case |")
     print("|---|---|---|---|---|---|")
     for nb, n, steps, t, bsps in rows:
-        print(f"| {nb} | {nb * n} | {steps} | {t:.3f} | {bsps:.3g} | {bsps / cpu_bsps:.1f} |")
+        print(f"| {nb} | {int(nb.split()[0]) * n} | {steps} | {t:.3f} | {bsps:.3g} | {bsps / cpu_bsps:.1f} |")
 
 
 if __name__ == "__main__":

@@ -8,9 +8,12 @@ step, kernels.py); ``to_simulations(sims)`` writes the state back.
 
 What the batch holds today: balls (free or with held velocities, local damping, external
 loads), kinematic wall segments (constant velocity and spin), every contact law of
-``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU). Not yet:
-clumps, flat joints, controllers, automatic dt and density scaling, checkpoints: a
-simulation that uses one of them is refused (``BatchError``), never run differently.
+``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU), flat joints
+(failure, breakage log, interface removal; kernels.flat_joint). Checkpoints go through
+the CPU: ``to_simulations`` then ``Simulation.save_checkpoint``. Not yet: clumps,
+controllers, automatic dt and density scaling (a simulation that uses one of them is
+refused, ``BatchError``, never run differently), and the energy accounts (the batch books
+no dissipated work).
 """
 import math
 import time
@@ -33,6 +36,7 @@ from . import kernels as K
 BLOCK = 128
 MAX_NEIGHBOURS = 24     # full-list slots per ball (disks of size ratio <= 2 with a skin
 MAX_WALLS = 4           # of 0.25 d_max have at most ~15); overflow is an error, not a loss
+MAX_BONDS = 12          # flat joints per ball (11 in bonded settle2d, gap factor 2.5)
 
 
 class BatchError(ValueError):
@@ -52,8 +56,6 @@ def _check(sim, k):
     why = []
     if len(sim.clumps):
         why.append("clumps")
-    if len(sim.bonds) and sim.bonds.active.any():
-        why.append("flat joints")
     if p[P.AUTO_DT] > 0.0 or p[P.DSCALE] > 0.0:
         why.append("automatic dt or density scaling (give the Simulation a fixed dt)")
     if p[P.DT] <= 0.0:
@@ -95,6 +97,7 @@ class Batch:
         self.steps = 0
         self._offsets = host.pop("offsets")
         self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
+        self._bond_offsets = host.pop("bond_offsets")
         host["cell_n"] = np.zeros(grid_cells, np.int32)
         host["cell_ids"] = np.full((grid_cells, max_cell), -1, np.int32)
         self.d = {k: cuda.to_device(v) for k, v in host.items()}
@@ -151,7 +154,7 @@ class Batch:
                      d["grid"], d["need"], d["cell_n"], d["cell_ids"], d["nb"], d["nbn"],
                      d["nh"], d["nb2"], d["nh2"], d["seg"], d["wlo"], d["whi"], d["wl"],
                      d["wln"], d["wh"], d["wl2"], d["wh2"], d["pos0"], d["travel"],
-                     d["err"])
+                     d["bl"], d["bln"], d["bij"], d["bactive"], d["relist"], d["err"])
 
     def run(self, n_steps, check_every=1000):
         """Advance every case ``n_steps`` steps; the error flags are read every
@@ -162,10 +165,12 @@ class Batch:
         for k in range(n_steps):
             self._launch("walls_step", max(self.n_segments, self.n_cases), d["seg"],
                          d["wvel"], d["womega"], d["centre"], d["wforce"], d["wmoment"],
-                         d["wcase"], d["travel"], d["cfg"], self.moving, d["need"])
+                         d["wcase"], d["travel"], d["cfg"], self.moving, d["need"],
+                         d["clock"])
             self._launch("first_half", nb, d["pos"], d["vel"], d["omega"], d["vend"],
                          d["wend"], d["force"], d["minv"], d["iinv"], d["fix"], d["alive"],
-                         d["case"], d["pos0"], d["cfg"], d["travel"], d["need"])
+                         d["case"], d["pos0"], d["cfg"], d["travel"], d["need"],
+                         d["relist"])
             self._build_lists()
             self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
                          d["rad"], d["mass"], d["minv"], d["iinv"], d["fix"], d["damp"],
@@ -173,7 +178,9 @@ class Batch:
                          d["coef"], d["nb"], d["nbn"], d["nh"], d["seg"], d["link"],
                          d["wvel"], d["womega"], d["centre"], d["wmat"], d["wl"], d["wln"],
                          d["wh"], d["wforce"], d["wmoment"], d["need"], d["cell_n"],
-                         d["bcell"], d["err"])
+                         d["bcell"], d["bl"], d["bln"], d["bij"], d["bc"],
+                         d["bsc"], d["bstate"], d["bfn"], d["bfs"], d["bactive"], d["relist"],
+                         d["clock"], d["logi"], d["logf"], d["logn"], d["err"])
             self.steps += 1
             if (k + 1) % check_every == 0 or k == n_steps - 1:
                 self._raise_errors()
@@ -214,10 +221,42 @@ class Batch:
             s.walls.centre[:] = cen[w0:w1]
             s.walls.force[:] = wf[w0:w1]
             s.walls.moment[:] = wm[w0:w1]
+            self._bonds_to_cpu(s, b, lo)
             s.cnt[0] += self.steps
             s.prm[P.TIME] += self.steps * s.prm[P.DT]
             self._lists_to_cpu(s, lo, hi, w0)
         self.steps = 0
+
+    def _bonds_to_cpu(self, sim, b, lo):
+        """Case b's flat-joint state (side 0's copy) and the breakages since the batch was
+        made (in the CPU's order: step, bond, element) into ``sim``."""
+        bd = sim.bonds
+        q0 = self._bond_offsets[b]
+        q1 = q0 + len(bd)
+        if q1 == q0:
+            return
+        bsc, st, fn, fs, act = (self.d[k].copy_to_host()[0, q0:q1] for k in
+                                ("bsc", "bstate", "bfn", "bfs", "bactive"))
+        bd.theta[:], bd.moment[:] = bsc[:, 0], bsc[:, 1]
+        bd.state[:], bd.fn[:], bd.fs[:], bd.active[:] = st, fn, fs, act
+        n = int(self.d["logn"].copy_to_host()[0])
+        li = self.d["logi"].copy_to_host()[:n]
+        lf = self.d["logf"].copy_to_host()[:n]
+        mine = (li[:, 1] >= q0) & (li[:, 1] < q1)
+        li, lf = li[mine], lf[mine]
+        order = np.lexsort((li[:, 2], li[:, 1], li[:, 0]))
+        log, k0 = sim.log, int(sim.log.n[0])
+        log.ensure(k0 + len(order))
+        for k, r in enumerate(order):
+            q = int(li[r, 1]) - q0
+            step = int(sim.cnt[0] + li[r, 0])
+            i = int(bd.i[q])
+            row = dict(step=step, time=sim.prm[P.TIME] + li[r, 0] * sim.prm[P.DT], bond=q,
+                       elem=int(li[r, 2]), i=i, j=int(bd.j[q]), stone=int(sim.balls.stone[i]),
+                       mode=int(li[r, 3]), x=lf[r, 0], y=lf[r, 1], stress=lf[r, 2])
+            for name, v in row.items():
+                getattr(log, name)[k0 + k] = v
+        log.n[0] = k0 + len(order)
 
     def _lists_to_cpu(self, sim, lo, hi, w0):
         """The case's contacts and their history as the CPU's Verlet lists (i < j, grouped
@@ -305,7 +344,46 @@ def _pack(sims):
     h["travel"] = np.zeros(len(sims))
     h["err"] = np.zeros(len(sims), np.int32)
     h["offsets"] = offsets
+    h["relist"] = np.zeros(len(sims), np.int32)
+    h["bond_offsets"] = np.concatenate([[0], np.cumsum([len(s.bonds) for s in sims])])
+    h["clock"] = np.zeros(1, np.int64)
+    _pack_bonds(sims, offsets, h)
     return h, len(sims), cells, max_cell
+
+
+def _pack_bonds(sims, offsets, h):
+    """The cases' flat joints end to end (ball indices shifted), their state once per
+    side (kernels.flat_joint), each ball's list of its joints, an empty breakage log."""
+    bonds = [s.bonds for s in sims]
+    nb = [len(bd) for bd in bonds]
+    ne = max(bd.state.shape[1] for bd in bonds)
+    if any(len(bd) and bd.state.shape[1] != ne for bd in bonds):
+        raise BatchError("cases with different numbers of flat-joint elements")
+    bij = np.concatenate([[bd.i + off, bd.j + off] for bd, off in zip(bonds, offsets)],
+                         axis=1).astype(np.int32).reshape(2, -1)
+    cols = ("rbar", "d0", "gi", "kn", "ks", "sigc", "coh", "tanphi", "mu")
+    h["bij"] = np.ascontiguousarray(bij)
+    h["bc"] = np.array([np.concatenate([getattr(bd, c) for bd in bonds]) for c in cols]
+                       ).reshape(len(cols), -1)
+    one = lambda name: np.concatenate([getattr(bd, name) for bd in bonds])  # noqa: E731
+    h["bsc"] = np.repeat(np.column_stack([one("theta"), one("moment")])[None], 2, axis=0)
+    for key, name in (("bstate", "state"), ("bfn", "fn"), ("bfs", "fs"), ("bactive", "active")):
+        shape = (-1,) if key == "bactive" else (-1, ne)
+        v = np.concatenate([getattr(bd, name)[:len(bd)].reshape((len(bd),) + shape[1:])
+                            for bd in bonds]).reshape(shape)
+        h[key] = np.ascontiguousarray(np.repeat(v[None], 2, axis=0))
+    n = h["case"].shape[0]
+    rows = np.concatenate([bij[0], bij[1]]).astype(np.int64)
+    order, slot = _slots(rows)
+    if len(slot) and slot.max() >= MAX_BONDS:
+        raise BatchError(f"a ball has more than {MAX_BONDS} flat joints")
+    h["bl"] = np.full((MAX_BONDS, n), -1, np.int32)
+    h["bl"][slot, rows[order]] = (np.arange(len(rows)) % max(sum(nb), 1))[order]
+    h["bln"] = np.bincount(rows, minlength=n).astype(np.int32)
+    cap = max(sum(nb) * ne, 1)
+    h["logi"] = np.zeros((cap, 4), np.int64)
+    h["logf"] = np.zeros((cap, 3))
+    h["logn"] = np.zeros(1, np.int64)
 
 
 def _slots(rows):

@@ -31,6 +31,7 @@ import math
 from numba import cuda, njit
 from numba.core import config
 
+from ..bonds import MODE_SHEAR, MODE_TENSION, _broken_element, _strip, _strip_sq
 from ..integrate import locally_damped
 from ..neighbours import seg_closest
 from ..submodels import NCOEF, WIDTH, contact_force, lf
@@ -39,6 +40,11 @@ from ..walls import wall_contact_point
 # per-case scalar columns (``cfg``) and error bits (``err``)
 DT, GX, GY, THICK, SKIN, VMAX2, X0, Y0, X1, Y1, CELL = range(11)
 NCFG = 11
+# flat-joint constants (rows of ``bc``) and per-side state columns (``bsc``); the
+# breakage log: ``logi`` (step, bond, element, mode), ``logf`` (x, y, stress)
+RBAR, D0, GI, KN, KS, SIGC, COH, TANPHI, MU = range(9)
+NBC = 9
+THETA, MOMENT = 0, 1
 ERR_NEIGHBOURS, ERR_CELL, ERR_WALLS, ERR_GUARD = 1, 2, 4, 8
 ERROR_TEXT = {ERR_NEIGHBOURS: "a ball has more neighbours than the list holds",
               ERR_CELL: "a cell holds more balls than it has room for",
@@ -99,8 +105,10 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
 
     @cuda.jit
     def walls_step(seg, wvel, womega, centre, wforce, wmoment, wcase, travel, cfg, moving,
-                   need):
+                   need, clock):
         s = cuda.grid(1)
+        if s == 0:
+            clock[0] += 1     # the step under way (1 = the batch's first), for the log
         if s < need.shape[0]:
             need[s] = 0       # this step's first_half flags the cases to rebuild
         if s >= seg.shape[0]:
@@ -129,7 +137,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
 
     @cuda.jit
     def first_half(pos, vel, omega, vend, wend, force, minv, iinv, fix, alive, case, pos0,
-                   cfg, travel, need):
+                   cfg, travel, need, relist):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
@@ -146,7 +154,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         dy = pos[i, 1] - pos0[i, 1]
         # a plain store of 1 from any ball that moved too far (an atomic max per ball
         # over the case serialised the whole batch on a few addresses)
-        if 2.0 * math.sqrt(dx * dx + dy * dy) + travel[b] > cfg[b, SKIN]:
+        if 2.0 * math.sqrt(dx * dx + dy * dy) + travel[b] > cfg[b, SKIN] or relist[b]:
             need[b] = 1
 
     @cuda.jit
@@ -186,9 +194,19 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             for c in range(width):
                 hist[k * nball + i, c] = hist2[k * nball + i, c]
 
+    @cuda.jit(device=True, inline=True)
+    def bonded(i, j, bl, bln, bij, bactive):
+        """An active flat joint joins i and j (its pair is no contact: CPU pair_forces)."""
+        for k in range(bln[i]):
+            q = bl[k, i]
+            if bij[0, q] + bij[1, q] - i == j:
+                return bactive[0 if bij[0, q] == i else 1, q] != 0
+        return False
+
     @cuda.jit
     def build(pos, rad, alive, case, cfg, grid, need, cell_n, cell_ids, nb, nbn, nh, nb2,
-              nh2, seg, wlo, whi, wl, wln, wh, wl2, wh2, pos0, travel, err):
+              nh2, seg, wlo, whi, wl, wln, wh, wl2, wh2, pos0, travel, bl, bln, bij,
+              bactive, relist, err):
         """New rows are written beside the old ones (nb2, nh2; wl2, wh2), searched in
         the old row for the history they carry, then copied over: each thread touches
         its own rows only, in global memory (slot-major: coalesced)."""
@@ -200,6 +218,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             return
         if i == 0 or case[i - 1] != b:
             travel[b] = 0.0       # read by first_half only, before this kernel
+            relist[b] = 0
         maxn = nb.shape[0]
         nball = nb.shape[1]
         width = nh.shape[1]
@@ -222,7 +241,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                     dx = pos[j, 0] - x
                     dy = pos[j, 1] - y
                     lim = r + rad[j] + skin
-                    if dx * dx + dy * dy >= lim * lim:
+                    if dx * dx + dy * dy >= lim * lim or bonded(i, j, bl, bln, bij, bactive):
                         continue
                     if n >= maxn:
                         cuda.atomic.or_(err, b, ERR_NEIGHBOURS)
@@ -259,10 +278,93 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         if need[case[i]] != 0:
             cell_n[bcell[i]] = 0
 
+    @cuda.jit(device=True)
+    def flat_joint(q, side, pos, vel, omega, rad, dt, t, bij, bc, bsc, bstate, bfn, bfs,
+                   bactive, clock, logi, logf, logn, eacc):
+        """Flat joint q evaluated by the thread of its ball ``side`` (0: i, 1: j) on that
+        side's copy of its state, as bonds.py does it (theta advanced, elements with
+        failure, broken elements' response, the interface removed when apart): both
+        copies see the same inputs and stay equal; side 0 logs the breakages. Returns
+        (removed, fx, fy, moment) on the calling ball."""
+        i = bij[0, q]
+        j = bij[1, q]
+        dx = pos[j, 0] - pos[i, 0]
+        dy = pos[j, 1] - pos[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        rinv = 1.0 / d
+        nx = dx * rinv
+        ny = dy * rinv
+        tx = -ny
+        ty = nx
+        ai = rad[i] + 0.5 * (d - rad[i] - rad[j])
+        aj = d - ai
+        w = omega[i] * ai + omega[j] * aj
+        vt = (vel[j, 0] - vel[i, 0] - w * tx) * tx + (vel[j, 1] - vel[i, 1] - w * ty) * ty
+        th = bsc[side, q, THETA] + (omega[j] - omega[i]) * dt
+        bsc[side, q, THETA] = th
+        rbar = bc[RBAR, q]
+        ne = bstate.shape[2]
+        gc = d - bc[D0, q]
+        le = 2.0 * rbar * (1.0 / ne)
+        ae = le * t
+        knt = bc[KN, q] * t
+        ksa = bc[KS, q] * ae
+        dfs = ksa * vt * dt
+        ftot_n = 0.0
+        ftot_s = 0.0
+        mc = 0.0
+        nbonded = 0
+        for e in range(ne):
+            a = -rbar + e * le
+            fs = bfs[side, q, e] - dfs
+            if bstate[side, q, e]:
+                i0, i1 = _strip(gc, th, a, a + le, False)
+                fn = knt * i0
+                if fn >= bc[SIGC, q] * ae or abs(fs) >= bc[COH, q] * ae - fn * bc[TANPHI, q]:
+                    tension = fn >= bc[SIGC, q] * ae
+                    if side == 0:
+                        k = cuda.atomic.add(logn, 0, 1)
+                        se = a + 0.5 * le
+                        logi[k, 0] = clock[0]
+                        logi[k, 1] = q
+                        logi[k, 2] = e
+                        logi[k, 3] = MODE_TENSION if tension else MODE_SHEAR
+                        logf[k, 0] = pos[i, 0] + ai * nx - se * ny
+                        logf[k, 1] = pos[i, 1] + ai * ny + se * nx
+                        logf[k, 2] = (fn if tension else abs(fs)) / ae
+                    bstate[side, q, e] = 0
+                    e_break = (0.5 * knt * _strip_sq(gc, th, a, a + le, False)
+                               + 0.5 * fs * fs / ksa)
+                    fn, fs, i1 = _broken_element(eacc, gc, th, a, le, fs, knt, ksa, bc[MU, q],
+                                                 e_break)
+                else:
+                    nbonded += 1
+            else:
+                fn, fs, i1 = _broken_element(eacc, gc, th, a, le, fs, knt, ksa, bc[MU, q], -1.0)
+            bfn[side, q, e] = fn
+            bfs[side, q, e] = fs
+            ftot_n += fn
+            ftot_s += fs
+            mc += knt * i1
+        if nbonded == 0 and gc - abs(th) * rbar > bc[GI, q]:
+            bactive[side, q] = 0      # apart beyond the installation gap: removed
+            for e in range(ne):
+                bfn[side, q, e] = 0.0
+                bfs[side, q, e] = 0.0
+            bsc[side, q, MOMENT] = 0.0
+            return True, 0.0, 0.0, 0.0
+        bsc[side, q, MOMENT] = mc
+        fx = -ftot_n * nx + ftot_s * tx          # on j (tension pulls j to i)
+        fy = -ftot_n * ny + ftot_s * ty
+        if side == 1:
+            return False, fx, fy, mc - aj * ftot_s
+        return False, -fx, -fy, -mc - ai * ftot_s
+
     @cuda.jit
     def forces(pos, vel, omega, vend, wend, rad, mass, minv, iinv, fix, damp, mat, alive,
                case, fext, force, cfg, coef, nb, nbn, nh, seg, link, wvel, womega, centre, wmat, wl,
-               wln, wh, wforce, wmoment, need, cell_n, bcell, err):
+               wln, wh, wforce, wmoment, need, cell_n, bcell, bl, bln, bij, bc, bsc,
+               bstate, bfn, bfs, bactive, relist, clock, logi, logf, logn, err):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
@@ -331,6 +433,20 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             cuda.atomic.add(wforce, (s, 0), -gx)
             cuda.atomic.add(wforce, (s, 1), -gy)
             cuda.atomic.add(wmoment, s, -((px - centre[s, 0]) * gy - (py - centre[s, 1]) * gx))
+        eacc = cuda.local.array(6, dtype=nh.dtype)    # energies: not booked on the GPU yet
+        for k in range(bln[i]):
+            q = bl[k, i]
+            side = 0 if bij[0, q] == i else 1
+            if bactive[side, q] == 0:
+                continue
+            gone, gx, gy, m = flat_joint(q, side, pos, vel, omega, rad, dt, thick, bij, bc, bsc,
+                                         bstate, bfn, bfs, bactive, clock, logi, logf, logn,
+                                         eacc)
+            fx += gx
+            fy += gy
+            mz += m
+            if gone:
+                relist[b] = 1         # the pair enters the contact list at once
         f = fix[i]
         alpha = damp[i]
         if alpha > 0.0:
