@@ -2,7 +2,7 @@
 segment contacts at joints, flat-joint strip integrals."""
 import numpy as np
 
-from ballaststudy.dem.bonds import _strip
+from ballaststudy.dem.bonds import strip_integrals
 from ballaststudy.dem.neighbours import build_pairs, build_wall_pairs, merge_history
 
 
@@ -74,12 +74,12 @@ def test_wall_pairs_brute_force():
 
 def test_strip_integrals():
     # bonded: int over [-1, 1] of (g - th s) = 2 g ; int s (g - th s) = -2 th / 3
-    i0, i1 = _strip(0.3, 0.5, -1.0, 1.0, False)
+    i0, i1 = strip_integrals(0.3, 0.5, -1.0, 1.0, False)
     assert np.isclose(i0, 0.6) and np.isclose(i1, -1.0 / 3.0)
     # compression only: g(s) = 0.3 - 0.5 s < 0 for s > 0.6 -> int_{0.6}^{1} = -0.04
-    i0, _ = _strip(0.3, 0.5, -1.0, 1.0, True)
+    i0, _ = strip_integrals(0.3, 0.5, -1.0, 1.0, True)
     assert np.isclose(i0, -0.04), i0
-    assert _strip(0.1, 0.0, -1.0, 1.0, True) == (0.0, 0.0)
+    assert strip_integrals(0.1, 0.0, -1.0, 1.0, True) == (0.0, 0.0)
 
 
 def test_verlet_validity_test_misses_no_contact():

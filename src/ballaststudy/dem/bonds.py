@@ -41,7 +41,7 @@ def _loaded_part(gc, th, a, b, compressed_only):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _strip(gc, th, a, b, compressed_only):
+def strip_integrals(gc, th, a, b, compressed_only):
     """Integrals of g(s) and g(s)*s over [a, b] (restricted to g < 0 if asked)."""
     a, b = _loaded_part(gc, th, a, b, compressed_only)
     if b <= a:
@@ -52,7 +52,7 @@ def _strip(gc, th, a, b, compressed_only):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _strip_sq(gc, th, a, b, compressed_only):
+def strip_energy(gc, th, a, b, compressed_only):
     """Integral of g(s)^2 over [a, b] (restricted to g < 0 if asked): strain energy."""
     a, b = _loaded_part(gc, th, a, b, compressed_only)
     if b <= a:
@@ -157,7 +157,7 @@ def _bond_elements(run, bonds, g, full):
         for e in range(ne):
             a = -rbar[b] + e * le
             fs = bfs[b, e] - dfs
-            i0, i1 = _strip(gc, th, a, a + le, False)
+            i0, i1 = strip_integrals(gc, th, a, a + le, False)
             fn = knt * i0
             # broken, or sigma >= sigma_c (tension), or tau >= c - sigma tan(phi) (shear)
             handed_over |= ((state[b, e] == 0) | (fn >= sigc[b] * ae)
@@ -203,7 +203,7 @@ def _bond_elements_in_full(run, kin, balls, bonds, log, g, full, n_full):
             a = -rbar[b] + e * le
             fs = bfs[b, e]           # advanced by the lean pass
             if state[b, e]:
-                i0, i1 = _strip(gc, th, a, a + le, False)
+                i0, i1 = strip_integrals(gc, th, a, a + le, False)
                 fn = knt * i0
                 if fn >= sigc[b] * ae or abs(fs) >= coh[b] * ae - fn * tanphi[b]:
                     fn, fs, i1 = _element_breaks(run, kin, balls, bonds, log, g, b, e, gc, th,
@@ -211,7 +211,7 @@ def _bond_elements_in_full(run, kin, balls, bonds, log, g, full, n_full):
                 else:
                     nbonded += 1
             else:
-                fn, fs, i1 = _broken_element(run.eacc, gc, th, a, le, fs, knt, ks[b] * ae,
+                fn, fs, i1 = broken_element(run.eacc, gc, th, a, le, fs, knt, ks[b] * ae,
                                              bmu[b], -1.0)
             bfn[b, e] = fn
             bfs[b, e] = fs
@@ -233,12 +233,12 @@ def _bond_elements_in_full(run, kin, balls, bonds, log, g, full, n_full):
 
 
 @njit(**LOOP)
-def _broken_element(eacc, gc, th, a, le, fs, knt, ksa, mu, e_break):
+def broken_element(eacc, gc, th, a, le, fs, knt, ksa, mu, e_break):
     """A broken element (compression-only notional surfaces with Coulomb friction) over
     [a, a + le]: (F_n, F_s, integral of g s). ksa = k_s A_e. e_break >= 0: it broke in this
     step with that strain energy; what survives is subtracted (breakage work), else the
     friction work of sliding is booked."""
-    i0, i1 = _strip(gc, th, a, a + le, True)
+    i0, i1 = strip_integrals(gc, th, a, a + le, True)
     fn = knt * i0
     lim = mu * max(-fn, 0.0)
     if abs(fs) > lim:
@@ -246,7 +246,7 @@ def _broken_element(eacc, gc, th, a, le, fs, knt, ksa, mu, e_break):
             eacc[P.E_FRICTION] += lim * (abs(fs) - lim) / ksa
         fs = lim if fs > 0.0 else -lim
     if e_break >= 0.0:
-        eacc[P.E_BREAKAGE] += e_break - (0.5 * knt * _strip_sq(gc, th, a, a + le, True)
+        eacc[P.E_BREAKAGE] += e_break - (0.5 * knt * strip_energy(gc, th, a, a + le, True)
                                          + 0.5 * fs * fs / ksa)
     return fn, fs, i1
 
@@ -254,7 +254,7 @@ def _broken_element(eacc, gc, th, a, le, fs, knt, ksa, mu, e_break):
 @njit(**LOOP)
 def _element_breaks(run, kin, balls, bonds, log, g, b, e, gc, th, a, le, fn, fs):
     """Element e of bond b fails at (F_n, F_s): logged (mode, stress, place), state 0;
-    returns its broken response (see _broken_element)."""
+    returns its broken response (see broken_element)."""
     t = run.prm[P.THICK]
     ae = le * t
     knt = bonds.kn[b] * t
@@ -267,9 +267,9 @@ def _element_breaks(run, kin, balls, bonds, log, g, b, e, gc, th, a, le, fn, fs)
                kin[i, 1] + g[b, G_AI] * g[b, G_NY] + se * g[b, G_NX],
                (fn if mode == MODE_TENSION else abs(fs)) / ae)
     bonds.state[b, e] = 0
-    # strain energy before the break; what survives is subtracted in _broken_element
-    e_break = 0.5 * knt * _strip_sq(gc, th, a, a + le, False) + 0.5 * fs * fs / ksa
-    return _broken_element(run.eacc, gc, th, a, le, fs, knt, ksa, bonds.mu[b], e_break)
+    # strain energy before the break; what survives is subtracted in broken_element
+    e_break = 0.5 * knt * strip_energy(gc, th, a, a + le, False) + 0.5 * fs * fs / ksa
+    return broken_element(run.eacc, gc, th, a, le, fs, knt, ksa, bonds.mu[b], e_break)
 
 
 @njit(**NO_NRT)
@@ -337,7 +337,7 @@ def bond_energy(pos, bonds, thick):
         le = 2.0 * rbar[b] / ne
         for e in range(ne):
             a = -rbar[b] + e * le
-            e_tot += 0.5 * kn[b] * thick * _strip_sq(gc, th, a, a + le, not state[b, e])
+            e_tot += 0.5 * kn[b] * thick * strip_energy(gc, th, a, a + le, not state[b, e])
             e_tot += 0.5 * bfs[b, e] ** 2 / (ks[b] * le * thick)
     return e_tot
 

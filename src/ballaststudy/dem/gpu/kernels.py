@@ -10,11 +10,14 @@ copies see the same inputs and evolve bit for bit alike, so action equals reacti
 exactly and no thread writes another ball's force (no atomics, no ordering between
 threads). It costs each contact twice; a half list would need atomics on both balls.
 
+Flat joints the same way (``flat_joint``): the thread of each of its two balls evaluates
+the joint on that side's copy of its state; side 0 writes the breakage log.
+
 Lists are slot-major (``nb[k, i]``, history row k N + i): the threads of a warp read
 adjacent rows.
 
 One step, in launch order (each a kernel over the index named); launches are few because
-each costs tens of microseconds of Python:
+each costs microseconds of the host even when prepared (batch._Prepared):
   walls_step (segment; case): reset the reaction, move the segment, add its travel to the
       case's; clear the case's rebuild flag
   first_half (ball): half kick (from the full-step velocity), drift; a ball whose
@@ -22,8 +25,8 @@ each costs tens of microseconds of Python:
       its case (the CPU rebuilds on its own exact criterion: the build times differ, the
       forces do not)
   bin, build (ball; flagged cases only): cell list, Verlet rows carrying history
-  forces (ball): empty the cells of a rebuilt case, contacts, walls, weight and load,
-      local damping, half kick, guards
+  forces (ball): empty the cells of a rebuilt case, contacts, walls, flat joints, weight
+      and load, local damping, half kick, guards
 (unbin empties the cells after the batch's first build, which precedes the first step.)
 """
 import math
@@ -31,7 +34,7 @@ import math
 from numba import cuda, njit
 from numba.core import config
 
-from ..bonds import MODE_SHEAR, MODE_TENSION, _broken_element, _strip, _strip_sq
+from ..bonds import MODE_SHEAR, MODE_TENSION, broken_element, strip_integrals, strip_energy
 from ..integrate import locally_damped
 from ..neighbours import seg_closest
 from ..submodels import NCOEF, WIDTH, contact_force, lf
@@ -318,7 +321,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             a = -rbar + e * le
             fs = bfs[side, q, e] - dfs
             if bstate[side, q, e]:
-                i0, i1 = _strip(gc, th, a, a + le, False)
+                i0, i1 = strip_integrals(gc, th, a, a + le, False)
                 fn = knt * i0
                 if fn >= bc[SIGC, q] * ae or abs(fs) >= bc[COH, q] * ae - fn * bc[TANPHI, q]:
                     tension = fn >= bc[SIGC, q] * ae
@@ -333,14 +336,14 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                         logf[k, 1] = pos[i, 1] + ai * ny + se * nx
                         logf[k, 2] = (fn if tension else abs(fs)) / ae
                     bstate[side, q, e] = 0
-                    e_break = (0.5 * knt * _strip_sq(gc, th, a, a + le, False)
+                    e_break = (0.5 * knt * strip_energy(gc, th, a, a + le, False)
                                + 0.5 * fs * fs / ksa)
-                    fn, fs, i1 = _broken_element(eacc, gc, th, a, le, fs, knt, ksa, bc[MU, q],
+                    fn, fs, i1 = broken_element(eacc, gc, th, a, le, fs, knt, ksa, bc[MU, q],
                                                  e_break)
                 else:
                     nbonded += 1
             else:
-                fn, fs, i1 = _broken_element(eacc, gc, th, a, le, fs, knt, ksa, bc[MU, q], -1.0)
+                fn, fs, i1 = broken_element(eacc, gc, th, a, le, fs, knt, ksa, bc[MU, q], -1.0)
             bfn[side, q, e] = fn
             bfs[side, q, e] = fs
             ftot_n += fn
