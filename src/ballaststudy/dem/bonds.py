@@ -95,6 +95,25 @@ def bond_forces(run, kin, balls, fa, bonds, log, scratch):
     _bond_scatter(bonds, g, fa)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def joint_frame(xi, yi, vxi, vyi, wi, ri, xj, yj, vxj, vyj, wj, rj):
+    """The frame of a joint between balls i and j: centre distance d, normal (nx, ny)
+    from i to j, distance ai from the centre of i to the interface centre (midway in the
+    gap) and the tangential velocity of j relative to i there (the GPU batch uses it too)."""
+    dx = xj - xi
+    dy = yj - yi
+    d = math.sqrt(dx * dx + dy * dy)
+    rinv = 1.0 / d
+    nx = dx * rinv
+    ny = dy * rinv
+    tx = -ny
+    ty = nx
+    ai = ri + 0.5 * (d - ri - rj)     # centre -> interface centre
+    aj = d - ai
+    w = wi * ai + wj * aj
+    return d, nx, ny, ai, (vxj - vxi - w * tx) * tx + (vyj - vyi - w * ty) * ty
+
+
 @njit(**LOOP)
 def _bond_geometry(dt, kin, rad, bonds, g):
     """The contact frame of every active bond:
@@ -106,18 +125,10 @@ def _bond_geometry(dt, kin, rad, bonds, g):
             continue
         i = b_i[b]
         j = b_j[b]
-        dx = kin[j, 0] - kin[i, 0]
-        dy = kin[j, 1] - kin[i, 1]
-        d = math.sqrt(dx * dx + dy * dy)
-        rinv = 1.0 / d
-        nx = dx * rinv
-        ny = dy * rinv
-        tx = -ny
-        ty = nx
-        ai = rad[i] + 0.5 * (d - rad[i] - rad[j])     # centre -> interface centre
-        aj = d - ai
-        w = kin[i, 4] * ai + kin[j, 4] * aj
-        g[b, G_VT] = (kin[j, 2] - kin[i, 2] - w * tx) * tx + (kin[j, 3] - kin[i, 3] - w * ty) * ty
+        d, nx, ny, ai, vt = joint_frame(
+            kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3], kin[i, 4], rad[i],
+            kin[j, 0], kin[j, 1], kin[j, 2], kin[j, 3], kin[j, 4], rad[j])
+        g[b, G_VT] = vt
         theta[b] += (kin[j, 4] - kin[i, 4]) * dt
         g[b, G_D] = d
         g[b, G_NX] = nx

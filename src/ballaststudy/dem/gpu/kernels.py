@@ -34,7 +34,8 @@ import math
 from numba import cuda, njit
 from numba.core import config
 
-from ..bonds import MODE_SHEAR, MODE_TENSION, broken_element, strip_integrals, strip_energy
+from ..bonds import (MODE_SHEAR, MODE_TENSION, broken_element, joint_frame, strip_energy,
+                     strip_integrals)
 from ..integrate import locally_damped
 from ..neighbours import seg_closest
 from ..submodels import NCOEF, WIDTH, contact_force, lf
@@ -190,6 +191,18 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                 return
 
     @cuda.jit(device=True, inline=True)
+    def entered(ids, hist, ids2, hist2, n, n_old, i, other, width, err, b, bit):
+        """``other`` enters slot n of ball i's new row (ids2, hist2) with the history it
+        carries; returns the new count (unchanged if the row is full: error ``bit``)."""
+        if n >= ids.shape[0]:
+            cuda.atomic.or_(err, b, bit)
+            return n
+        nball = ids.shape[1]
+        ids2[n, i] = other
+        carried(ids, hist, n_old, i, nball, other, hist2, n * nball + i, width)
+        return n + 1
+
+    @cuda.jit(device=True, inline=True)
     def adopt(ids, hist, ids2, hist2, n, i, nball, width):
         """Ball i's new row (ids2, hist2) becomes its row (ids, hist)."""
         for k in range(n):
@@ -222,7 +235,6 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         if i == 0 or case[i - 1] != b:
             travel[b] = 0.0       # read by first_half only, before this kernel
             relist[b] = 0
-        maxn = nb.shape[0]
         nball = nb.shape[1]
         width = nh.shape[1]
         x = pos[i, 0]
@@ -246,15 +258,10 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                     lim = r + rad[j] + skin
                     if dx * dx + dy * dy >= lim * lim or bonded(i, j, bl, bln, bij, bactive):
                         continue
-                    if n >= maxn:
-                        cuda.atomic.or_(err, b, ERR_NEIGHBOURS)
-                        continue
-                    nb2[n, i] = j
-                    carried(nb, nh, n_old, i, nball, j, nh2, n * nball + i, width)
-                    n += 1
+                    n = entered(nb, nh, nb2, nh2, n, n_old, i, j, width, err, b, ERR_NEIGHBOURS)
         adopt(nb, nh, nb2, nh2, n, i, nball, width)
         nbn[i] = n
-        maxw = wl.shape[0]        # the case's wall segments, the same way
+        # the case's wall segments, the same way
         n_old = wln[i]
         n = 0
         for s in range(wlo[b], whi[b]):
@@ -262,12 +269,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             lim = r + skin
             if (x - px) ** 2 + (y - py) ** 2 >= lim * lim:
                 continue
-            if n >= maxw:
-                cuda.atomic.or_(err, b, ERR_WALLS)
-                continue
-            wl2[n, i] = s
-            carried(wl, wh, n_old, i, nball, s, wh2, n * nball + i, width)
-            n += 1
+            n = entered(wl, wh, wl2, wh2, n, n_old, i, s, width, err, b, ERR_WALLS)
         adopt(wl, wh, wl2, wh2, n, i, nball, width)
         wln[i] = n
         pos0[i, 0] = x
@@ -291,18 +293,12 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         (removed, fx, fy, moment) on the calling ball."""
         i = bij[0, q]
         j = bij[1, q]
-        dx = pos[j, 0] - pos[i, 0]
-        dy = pos[j, 1] - pos[i, 1]
-        d = math.sqrt(dx * dx + dy * dy)
-        rinv = 1.0 / d
-        nx = dx * rinv
-        ny = dy * rinv
+        d, nx, ny, ai, vt = joint_frame(
+            pos[i, 0], pos[i, 1], vel[i, 0], vel[i, 1], omega[i], rad[i],
+            pos[j, 0], pos[j, 1], vel[j, 0], vel[j, 1], omega[j], rad[j])
         tx = -ny
         ty = nx
-        ai = rad[i] + 0.5 * (d - rad[i] - rad[j])
         aj = d - ai
-        w = omega[i] * ai + omega[j] * aj
-        vt = (vel[j, 0] - vel[i, 0] - w * tx) * tx + (vel[j, 1] - vel[i, 1] - w * ty) * ty
         th = bsc[side, q, THETA] + (omega[j] - omega[i]) * dt
         bsc[side, q, THETA] = th
         rbar = bc[RBAR, q]
