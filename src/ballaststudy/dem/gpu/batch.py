@@ -9,9 +9,9 @@ step, kernels.py); ``to_simulations(sims)`` writes the state back.
 What the batch holds today: balls (free or with held velocities, local damping, external
 loads), kinematic wall segments (constant velocity and spin), every contact law of
 ``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU), flat joints
-(failure, breakage log, interface removal; kernels.flat_joint). Checkpoints go through
-the CPU: ``to_simulations`` then ``Simulation.save_checkpoint``. Not yet: clumps,
-controllers, automatic dt and density scaling (a simulation that uses one of them is
+(failure, breakage log, interface removal; kernels.flat_joint), clumps (free or held).
+Checkpoints go through the CPU: ``to_simulations`` then ``Simulation.save_checkpoint``.
+Not yet: controllers, automatic dt and density scaling (a simulation that uses one of them is
 refused, ``BatchError``, never run differently), and the energy accounts (the batch books
 no dissipated work).
 """
@@ -54,8 +54,6 @@ def cuda_available():
 def _check(sim, k):
     p = sim.prm
     why = []
-    if len(sim.clumps):
-        why.append("clumps")
     if p[P.AUTO_DT] > 0.0 or p[P.DSCALE] > 0.0:
         why.append("automatic dt or density scaling (give the Simulation a fixed dt)")
     if p[P.DT] <= 0.0:
@@ -98,6 +96,8 @@ class Batch:
         self._offsets = host.pop("offsets")
         self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
         self._bond_offsets = host.pop("bond_offsets")
+        self._clump_offsets = host.pop("clump_offsets")
+        self.n_clumps = host["cpos"].shape[0]
         host["cell_n"] = np.zeros(grid_cells, np.int32)
         host["cell_ids"] = np.full((grid_cells, max_cell), -1, np.int32)
         self.d = {k: cuda.to_device(v) for k, v in host.items()}
@@ -154,7 +154,8 @@ class Batch:
                      d["grid"], d["need"], d["cell_n"], d["cell_ids"], d["nb"], d["nbn"],
                      d["nh"], d["nb2"], d["nh2"], d["seg"], d["wlo"], d["whi"], d["wl"],
                      d["wln"], d["wh"], d["wl2"], d["wh2"], d["pos0"], d["travel"],
-                     d["bl"], d["bln"], d["bij"], d["bactive"], d["relist"], d["err"])
+                     d["bl"], d["bln"], d["bij"], d["bactive"], d["relist"], d["clump"],
+                     d["err"])
 
     def run(self, n_steps, check_every=1000):
         """Advance every case ``n_steps`` steps; the error flags are read every
@@ -170,7 +171,12 @@ class Batch:
             self._launch("first_half", nb, d["pos"], d["vel"], d["omega"], d["vend"],
                          d["wend"], d["force"], d["minv"], d["iinv"], d["fix"], d["alive"],
                          d["case"], d["pos0"], d["cfg"], d["travel"], d["need"],
-                         d["relist"])
+                         d["relist"], d["clump"])
+            self._launch("clumps_first", self.n_clumps, d["cpos"], d["cvel"], d["comega"],
+                         d["ctheta"], d["cmass"], d["cinertia"], d["cheld"], d["cforce"],
+                         d["cmoment"], d["ccase"], d["cfg"], d["pstart"], d["pidx"],
+                         d["offset"], d["alive"], d["pos"], d["vel"], d["omega"], d["pos0"],
+                         d["travel"], d["need"])
             self._build_lists()
             self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
                          d["rad"], d["mass"], d["minv"], d["iinv"], d["fix"], d["damp"],
@@ -180,7 +186,12 @@ class Batch:
                          d["wh"], d["wforce"], d["wmoment"], d["need"], d["cell_n"],
                          d["bcell"], d["bl"], d["bln"], d["bij"], d["bc"],
                          d["bsc"], d["bstate"], d["bfn"], d["bfs"], d["bactive"], d["relist"],
-                         d["clock"], d["logi"], d["logf"], d["logn"], d["err"])
+                         d["clock"], d["logi"], d["logf"], d["logn"], d["clump"], d["err"])
+            self._launch("clumps_second", self.n_clumps, d["cpos"], d["cvel"], d["comega"],
+                         d["ctheta"], d["cmass"], d["cinertia"], d["cheld"], d["cforce"],
+                         d["cmoment"], d["cdamp"], d["ccase"], d["cfg"], d["pstart"],
+                         d["pidx"], d["offset"], d["alive"], d["pos"], d["force"], d["vend"],
+                         d["wend"], d["err"])
             self.steps += 1
             if (k + 1) % check_every == 0 or k == n_steps - 1:
                 self._raise_errors()
@@ -222,6 +233,10 @@ class Batch:
             s.walls.force[:] = wf[w0:w1]
             s.walls.moment[:] = wm[w0:w1]
             self._bonds_to_cpu(s, b, lo)
+            c0, c1 = self._clump_offsets[b], self._clump_offsets[b + 1]
+            for key, name in (("cpos", "pos"), ("cvel", "vel"), ("comega", "omega"),
+                              ("ctheta", "theta"), ("cforce", "force"), ("cmoment", "moment")):
+                getattr(s.clumps, name)[:] = self.d[key].copy_to_host()[c0:c1]
             s.cnt[0] += self.steps
             s.prm[P.TIME] += self.steps * s.prm[P.DT]
             self._lists_to_cpu(s, lo, hi, w0)
@@ -348,7 +363,30 @@ def _pack(sims):
     h["bond_offsets"] = np.concatenate([[0], np.cumsum([len(s.bonds) for s in sims])])
     h["clock"] = np.zeros(1, np.int64)
     _pack_bonds(sims, offsets, h)
+    _pack_clumps(sims, offsets, h)
     return h, len(sims), cells, max_cell
+
+
+def _pack_clumps(sims, offsets, h):
+    """The cases' clumps end to end, each ball's clump (global index or -1) and each
+    clump's pebbles (ball ids ascending: ``pidx[pstart[c]:pstart[c + 1]]``)."""
+    nc = [len(s.clumps) for s in sims]
+    coff = np.concatenate([[0], np.cumsum(nc)]).astype(np.int64)
+    for key, name in (("cpos", "pos"), ("cvel", "vel"), ("comega", "omega"),
+                      ("ctheta", "theta"), ("cmass", "mass"), ("cinertia", "inertia"),
+                      ("cheld", "held"), ("cforce", "force"), ("cmoment", "moment"),
+                      ("cdamp", "damp")):
+        h[key] = np.ascontiguousarray(np.concatenate([getattr(s.clumps, name) for s in sims]))
+    h["ccase"] = np.repeat(np.arange(len(sims), dtype=np.int32), nc)
+    clump = np.concatenate([np.where(s.balls.clump >= 0, s.balls.clump + coff[b], -1)
+                            for b, s in enumerate(sims)]).astype(np.int32)
+    h["clump"] = clump
+    h["offset"] = np.ascontiguousarray(np.concatenate([s.balls.offset for s in sims]))
+    pebbles = np.flatnonzero(clump >= 0)
+    order = np.argsort(clump[pebbles], kind="stable")      # by clump, ball ids ascending
+    h["pidx"] = pebbles[order].astype(np.int32)
+    h["pstart"] = np.searchsorted(clump[pebbles][order], np.arange(coff[-1] + 1)).astype(np.int32)
+    h["clump_offsets"] = coff
 
 
 def _pack_bonds(sims, offsets, h):

@@ -24,9 +24,12 @@ each costs microseconds of the host even when prepared (batch._Prepared):
       displacement since the build, doubled, plus the wall travel exceeds the skin flags
       its case (the CPU rebuilds on its own exact criterion: the build times differ, the
       forces do not)
+  clumps_first (clump; only if there are clumps): half kick, drift, pebbles placed and
+      checked like free balls
   bin, build (ball; flagged cases only): cell list, Verlet rows carrying history
   forces (ball): empty the cells of a rebuilt case, contacts, walls, flat joints, weight
-      and load, local damping, half kick, guards
+      and load, local damping, half kick, guards (a pebble keeps its raw force)
+  clumps_second (clump): pebble forces gathered, damping, half kick, pebble velocities
 (unbin empties the cells after the batch's first build, which precedes the first step.)
 """
 import math
@@ -141,10 +144,10 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
 
     @cuda.jit
     def first_half(pos, vel, omega, vend, wend, force, minv, iinv, fix, alive, case, pos0,
-                   cfg, travel, need, relist):
+                   cfg, travel, need, relist, clump):
         i = cuda.grid(1)
-        if i >= pos.shape[0] or alive[i] == 0:
-            return
+        if i >= pos.shape[0] or alive[i] == 0 or clump[i] >= 0:
+            return            # (a clump's pebbles: clumps_first)
         b = case[i]
         dt = cfg[b, DT]
         h = 0.5 * dt
@@ -222,7 +225,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
     @cuda.jit
     def build(pos, rad, alive, case, cfg, grid, need, cell_n, cell_ids, nb, nbn, nh, nb2,
               nh2, seg, wlo, whi, wl, wln, wh, wl2, wh2, pos0, travel, bl, bln, bij,
-              bactive, relist, err):
+              bactive, relist, clump, err):
         """New rows are written beside the old ones (nb2, nh2; wl2, wh2), searched in
         the old row for the history they carry, then copied over: each thread touches
         its own rows only, in global memory (slot-major: coalesced)."""
@@ -251,7 +254,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                 c = grid[b, 2] + ey * ncx + ex
                 for q in range(min(cell_n[c], cell_ids.shape[1])):
                     j = cell_ids[c, q]
-                    if j == i:
+                    if j == i or (clump[i] >= 0 and clump[j] == clump[i]):
                         continue
                     dx = pos[j, 0] - x
                     dy = pos[j, 1] - y
@@ -363,7 +366,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
     def forces(pos, vel, omega, vend, wend, rad, mass, minv, iinv, fix, damp, mat, alive,
                case, fext, force, cfg, coef, nb, nbn, nh, seg, link, wvel, womega, centre, wmat, wl,
                wln, wh, wforce, wmoment, need, cell_n, bcell, bl, bln, bij, bc, bsc,
-               bstate, bfn, bfs, bactive, relist, clock, logi, logf, logn, err):
+               bstate, bfn, bfs, bactive, relist, clock, logi, logf, logn, clump, err):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
@@ -372,8 +375,9 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             cell_n[bcell[i]] = 0      # the build is done: empty the cells for the next one
         dt = cfg[b, DT]
         thick = cfg[b, THICK]
-        fx = mass[i] * cfg[b, GX] + fext[i, 0]
-        fy = mass[i] * cfg[b, GY] + fext[i, 1]
+        pebble = clump[i] >= 0        # its clump carries the weight and integrates
+        fx = (0.0 if pebble else mass[i] * cfg[b, GX]) + fext[i, 0]
+        fy = (0.0 if pebble else mass[i] * cfg[b, GY]) + fext[i, 1]
         mz = 0.0
         nball = nb.shape[1]
         xi = pos[i, 0]
@@ -446,6 +450,11 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             mz += m
             if gone:
                 relist[b] = 1         # the pair enters the contact list at once
+        if pebble:
+            force[i, 0] = fx
+            force[i, 1] = fy
+            force[i, 2] = mz
+            return
         f = fix[i]
         alpha = damp[i]
         if alpha > 0.0:
@@ -467,11 +476,105 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         vend[i, 0] = vx
         vend[i, 1] = vy
         wend[i] = wz
-        v2 = vx * vx + vy * vy
-        ok = ((xi >= cfg[b, X0]) and (xi <= cfg[b, X1]) and (yi >= cfg[b, Y0])
-              and (yi <= cfg[b, Y1]) and (v2 <= cfg[b, VMAX2]) and abs(wz) < 1e300)
-        if not ok:
+        if not in_domain(cfg, b, xi, yi, vx, vy, wz):
             cuda.atomic.or_(err, b, ERR_GUARD)
 
+    @cuda.jit(device=True, inline=True)
+    def in_domain(cfg, b, x, y, vx, vy, w):
+        """The guards of integrate.in_domain (NaN fails every comparison)."""
+        return ((x >= cfg[b, X0]) and (x <= cfg[b, X1]) and (y >= cfg[b, Y0])
+                and (y <= cfg[b, Y1]) and (vx * vx + vy * vy <= cfg[b, VMAX2])
+                and abs(w) < 1e300)
+
+    @cuda.jit(device=True, inline=True)
+    def place_pebbles(c, cpos, cvel, comega, ctheta, pstart, pidx, offset, alive, pos, vel,
+                      omega):
+        """Pebbles of clump c at the clump's rigid motion (clumps.place_pebbles)."""
+        cs = math.cos(ctheta[c])
+        sn = math.sin(ctheta[c])
+        for k in range(pstart[c], pstart[c + 1]):
+            i = pidx[k]
+            if alive[i] == 0:
+                continue
+            ox = cs * offset[i, 0] - sn * offset[i, 1]
+            oy = sn * offset[i, 0] + cs * offset[i, 1]
+            pos[i, 0] = cpos[c, 0] + ox
+            pos[i, 1] = cpos[c, 1] + oy
+            vel[i, 0] = cvel[c, 0] - comega[c] * oy
+            vel[i, 1] = cvel[c, 1] + comega[c] * ox
+            omega[i] = comega[c]
+
+    @cuda.jit
+    def clumps_first(cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment,
+                     ccase, cfg, pstart, pidx, offset, alive, pos, vel, omega, pos0, travel,
+                     need):
+        """First half of the step of clump c (integrate.clumps_kick_drift), its pebbles
+        placed (half-step velocities) and checked against the skin like free balls."""
+        c = cuda.grid(1)
+        if c >= cpos.shape[0]:
+            return
+        b = ccase[c]
+        dt = cfg[b, DT]
+        h = 0.5 * dt
+        if not cheld[c]:
+            cvel[c, 0] += h * cforce[c, 0] / cmass[c]
+            cvel[c, 1] += h * cforce[c, 1] / cmass[c]
+            comega[c] += h * cmoment[c] / cinertia[c]
+        cpos[c, 0] += dt * cvel[c, 0]
+        cpos[c, 1] += dt * cvel[c, 1]
+        ctheta[c] += dt * comega[c]
+        place_pebbles(c, cpos, cvel, comega, ctheta, pstart, pidx, offset, alive, pos, vel,
+                      omega)
+        for k in range(pstart[c], pstart[c + 1]):
+            i = pidx[k]
+            dx = pos[i, 0] - pos0[i, 0]
+            dy = pos[i, 1] - pos0[i, 1]
+            if alive[i] and 2.0 * math.sqrt(dx * dx + dy * dy) + travel[b] > cfg[b, SKIN]:
+                need[b] = 1
+
+    @cuda.jit
+    def clumps_second(cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment,
+                      cdamp, ccase, cfg, pstart, pidx, offset, alive, pos, force, vend, wend,
+                      err):
+        """Second half of clump c: weight plus its pebbles' forces and moments (in ball
+        order, as gather_clumps), local damping and half kick unless held, its pebbles'
+        full-step velocities."""
+        c = cuda.grid(1)
+        if c >= cpos.shape[0]:
+            return
+        b = ccase[c]
+        h = 0.5 * cfg[b, DT]
+        fx = cmass[c] * cfg[b, GX]
+        fy = cmass[c] * cfg[b, GY]
+        mz = 0.0
+        for k in range(pstart[c], pstart[c + 1]):
+            i = pidx[k]
+            if alive[i] == 0:
+                continue
+            fx += force[i, 0]
+            fy += force[i, 1]
+            mz += force[i, 2] + (pos[i, 0] - cpos[c, 0]) * force[i, 1] \
+                - (pos[i, 1] - cpos[c, 1]) * force[i, 0]
+        if not cheld[c]:
+            alpha = cdamp[c]
+            if alpha > 0.0:
+                fx = locally_damped(fx, cvel[c, 0], alpha)
+                fy = locally_damped(fy, cvel[c, 1], alpha)
+                mz = locally_damped(mz, comega[c], alpha)
+            cvel[c, 0] += h * fx / cmass[c]
+            cvel[c, 1] += h * fy / cmass[c]
+            comega[c] += h * mz / cinertia[c]
+        cforce[c, 0] = fx
+        cforce[c, 1] = fy
+        cmoment[c] = mz
+        place_pebbles(c, cpos, cvel, comega, ctheta, pstart, pidx, offset, alive, pos, vend,
+                      wend)
+        for k in range(pstart[c], pstart[c + 1]):
+            i = pidx[k]
+            if alive[i] and not in_domain(cfg, b, pos[i, 0], pos[i, 1], vend[i, 0], vend[i, 1],
+                                          wend[i]):
+                cuda.atomic.or_(err, b, ERR_GUARD)
+
     return dict(walls_step=walls_step, first_half=first_half, bin=bin_balls, build=build,
-                unbin=unbin, forces=forces)
+                unbin=unbin, forces=forces, clumps_first=clumps_first,
+                clumps_second=clumps_second)
