@@ -18,6 +18,7 @@ no dissipated work).
 import math
 import time
 
+import numba
 import numpy as np
 from numba import cuda
 
@@ -33,7 +34,9 @@ from .. import params as P
 from ..state import Pairs, WallPairs
 from . import kernels as K
 
-BLOCK = 128
+# threads per block; numba's CUDA simulator runs every thread of a block as a Python
+# thread, idle ones too, so its blocks are small (the tests' cases have tens of balls)
+BLOCK = 16 if numba.config.ENABLE_CUDASIM else 128
 MAX_NEIGHBOURS = 24     # full-list slots per ball (disks of size ratio <= 2 with a skin
 MAX_WALLS = 4           # of 0.25 d_max have at most ~15); overflow is an error, not a loss
 MAX_BONDS = 12          # flat joints per ball (11 in bonded settle2d, gap factor 2.5)

@@ -50,7 +50,6 @@ NCFG = 11
 # flat-joint constants (rows of ``bc``) and per-side state columns (``bsc``); the
 # breakage log: ``logi`` (step, bond, element, mode), ``logf`` (x, y, stress)
 RBAR, D0, GI, KN, KS, SIGC, COH, TANPHI, MU = range(9)
-NBC = 9
 THETA, MOMENT = 0, 1
 ERR_NEIGHBOURS, ERR_CELL, ERR_WALLS, ERR_GUARD = 1, 2, 4, 8
 ERROR_TEXT = {ERR_NEIGHBOURS: "a ball has more neighbours than the list holds",
