@@ -26,6 +26,16 @@ def mass_properties(x, y, r, rho, thick):
     return mt, cx, cy, inertia
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def pebble_motion(cx, cy, vx, vy, w, cs, sn, ox, oy):
+    """Position and velocity of the pebble at (ox, oy) in the frame of a clump at (cx, cy)
+    moving at (vx, vy) with spin w, turned by (cos, sin) = (cs, sn) (the GPU batch uses it
+    too)."""
+    rx = cs * ox - sn * oy
+    ry = sn * ox + cs * oy
+    return cx + rx, cy + ry, vx - w * ry, vy + w * rx
+
+
 @njit(**NO_NRT)
 def place_pebbles(prm, kin, balls, clumps, pebbles):
     """Position/velocity of the ``pebbles`` (their ball ids, ascending) from the rigid
@@ -53,12 +63,9 @@ def place_pebbles(prm, kin, balls, clumps, pebbles):
             cs = math.cos(ctheta[c])
             sn = math.sin(ctheta[c])
             last = c
-        ox = cs * offset[i, 0] - sn * offset[i, 1]
-        oy = sn * offset[i, 0] + cs * offset[i, 1]
-        kin[i, 0] = cpos[c, 0] + ox
-        kin[i, 1] = cpos[c, 1] + oy
-        kin[i, 2] = cvel[c, 0] - comega[c] * oy
-        kin[i, 3] = cvel[c, 1] + comega[c] * ox
+        kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3] = pebble_motion(
+            cpos[c, 0], cpos[c, 1], cvel[c, 0], cvel[c, 1], comega[c], cs, sn,
+            offset[i, 0], offset[i, 1])
         kin[i, 4] = comega[c]
         if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
             suspect = True

@@ -55,6 +55,24 @@ def rows(sim):
                                                                         pr.j[:pr.n[0]]))}
 
 
+def on_both(cases, steps):
+    """(cpu, gpu): copies of ``cases`` advanced ``steps`` steps by each engine."""
+    cpu = [copy.deepcopy(s) for s in cases]
+    for s in cpu:
+        s.run(steps)
+    return cpu, batch_run(cases, steps)
+
+
+def assert_same_motion(c, g):
+    """Balls (and clumps) of a case as on the CPU within round-off."""
+    assert np.abs(c.balls.pos - g.balls.pos).max() < 1e-13
+    assert np.abs(c.balls.vel - g.balls.vel).max() < 1e-10
+    assert np.abs(c.balls.omega - g.balls.omega).max() < 1e-7
+    if len(c.clumps):
+        assert np.abs(c.clumps.pos - g.clumps.pos).max() < 1e-13
+        assert np.abs(c.clumps.theta - g.clumps.theta).max() < 1e-12
+
+
 def batch_run(sims, steps):
     sims = [copy.deepcopy(s) for s in sims]
     Batch.from_simulations(sims).run(steps).to_simulations(sims)
@@ -65,14 +83,9 @@ def test_batch_steps_like_the_cpu_engine(beds):
     """Three settled beds (one with a moving wall), 12 steps with a skin that forces
     rebuilds: positions, velocities, spins and wall reactions as on the CPU within
     round-off, and the contacts' shear history carried over the rebuilds."""
-    cpu = [copy.deepcopy(s) for s in beds]
-    for s in cpu:
-        s.run(12)
-    gpu = batch_run(beds, 12)
+    cpu, gpu = on_both(beds, 12)
     for c, g in zip(cpu, gpu):
-        assert np.abs(c.balls.pos - g.balls.pos).max() < 1e-13
-        assert np.abs(c.balls.vel - g.balls.vel).max() < 1e-10
-        assert np.abs(c.balls.omega - g.balls.omega).max() < 1e-7
+        assert_same_motion(c, g)
         assert np.allclose(c.walls.force, g.walls.force, rtol=1e-9, atol=1e-9)
         assert np.abs(c.walls.seg - g.walls.seg).max() < 1e-15
         g.run(1)        # the exported lists: the CPU's rebuild carries their history
@@ -88,14 +101,10 @@ def test_rolling_resistance_steps_like_the_cpu_engine():
     """The PFC law with rolling resistance (history: shear force, rolling moment; state:
     slip and rolling work): 8 steps of a bed as on the CPU within round-off."""
     beds = [bed(60, 4, rolling=True)]
-    cpu = [copy.deepcopy(s) for s in beds]
-    for s in cpu:
-        s.run(8)
-    gpu = batch_run(beds, 8)
+    cpu, gpu = on_both(beds, 8)
     col = beds[0].law.history_column("rolling")
     for c, g in zip(cpu, gpu):
-        assert np.abs(c.balls.pos - g.balls.pos).max() < 1e-13
-        assert np.abs(c.balls.omega - g.balls.omega).max() < 1e-7
+        assert_same_motion(c, g)
         g.run(1)
         c.run(1)
         hc, hg = rows(c), rows(g)
@@ -165,11 +174,8 @@ def test_flat_jointed_stones_step_like_the_cpu_engine():
     b.balls.stone[:] = np.arange(len(b.balls)) // 4
     assert b.install_flat_joints(FlatJointMaterial(E=1e7, sigma_c=2e5, c=2e5,
                                                    gap_factor=1.5)) > 15
-    c = copy.deepcopy(b)
-    c.run(12)
-    g = batch_run([b], 12)[0]
-    assert np.abs(c.balls.pos - g.balls.pos).max() < 1e-13
-    assert np.abs(c.balls.omega - g.balls.omega).max() < 1e-7
+    (c,), (g,) = on_both([b], 12)
+    assert_same_motion(c, g)
     for name in ("fn", "fs", "theta", "moment"):
         ref = getattr(c.bonds, name)
         assert np.allclose(getattr(g.bonds, name), ref, rtol=1e-7,
@@ -213,16 +219,9 @@ def test_the_complete_small_model_and_clumps_step_like_the_cpu_engine(small_mode
     assert np.abs(landed.balls.force[pebbles]).max() > 0.0      # the pebbles touch the bed
     pushed = copy.deepcopy(landed)
     pushed.set_clump_velocity(0, vel=(0.0, -0.02), omega=0.0, held=True)
-    cases = [model, landed, pushed]
-    cpu = [copy.deepcopy(s) for s in cases]
-    for s in cpu:
-        s.run(12)
-    gpu = batch_run(cases, 12)
+    cpu, gpu = on_both([model, landed, pushed], 12)
     for c, g in zip(cpu, gpu):
-        assert np.abs(c.balls.pos - g.balls.pos).max() < 1e-13
-        assert np.abs(c.balls.vel - g.balls.vel).max() < 1e-10
-        assert np.abs(c.clumps.pos - g.clumps.pos).max() < 1e-13
-        assert np.abs(c.clumps.theta - g.clumps.theta).max() < 1e-12
+        assert_same_motion(c, g)
         assert np.allclose(c.clumps.force, g.clumps.force, rtol=1e-8, atol=1e-12)
         assert np.allclose(c.clumps.moment, g.clumps.moment, rtol=1e-6, atol=1e-12)
     assert np.allclose(gpu[0].bonds.fn, cpu[0].bonds.fn, rtol=1e-7,

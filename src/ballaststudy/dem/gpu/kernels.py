@@ -39,6 +39,7 @@ from numba.core import config
 
 from ..bonds import (MODE_SHEAR, MODE_TENSION, broken_element, joint_frame, strip_energy,
                      strip_integrals)
+from ..clumps import pebble_motion
 from ..integrate import locally_damped
 from ..neighbours import seg_closest
 from ..submodels import NCOEF, WIDTH, contact_force, lf
@@ -163,13 +164,19 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         if 2.0 * math.sqrt(dx * dx + dy * dy) + travel[b] > cfg[b, SKIN] or relist[b]:
             need[b] = 1
 
+    @cuda.jit(device=True, inline=True)
+    def rebuilding(i, alive, case, need):
+        """The case of ball i if the ball is alive and its case rebuilds now, else -1."""
+        if i >= alive.shape[0] or alive[i] == 0:
+            return -1
+        b = case[i]
+        return b if need[b] != 0 else -1
+
     @cuda.jit
     def bin_balls(pos, alive, case, cfg, grid, need, cell_n, cell_ids, bcell, err):
         i = cuda.grid(1)
-        if i >= pos.shape[0] or alive[i] == 0:
-            return
-        b = case[i]
-        if need[b] == 0:
+        b = rebuilding(i, alive, case, need)
+        if b < 0:
             return
         cx, cy = cell_of(cfg, grid, b, pos[i, 0], pos[i, 1])
         c = grid[b, 2] + cy * grid[b, 0] + cx
@@ -229,10 +236,8 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         the old row for the history they carry, then copied over: each thread touches
         its own rows only, in global memory (slot-major: coalesced)."""
         i = cuda.grid(1)
-        if i >= pos.shape[0] or alive[i] == 0:
-            return
-        b = case[i]
-        if need[b] == 0:
+        b = rebuilding(i, alive, case, need)
+        if b < 0:
             return
         if i == 0 or case[i - 1] != b:
             travel[b] = 0.0       # read by first_half only, before this kernel
@@ -495,12 +500,9 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             i = pidx[k]
             if alive[i] == 0:
                 continue
-            ox = cs * offset[i, 0] - sn * offset[i, 1]
-            oy = sn * offset[i, 0] + cs * offset[i, 1]
-            pos[i, 0] = cpos[c, 0] + ox
-            pos[i, 1] = cpos[c, 1] + oy
-            vel[i, 0] = cvel[c, 0] - comega[c] * oy
-            vel[i, 1] = cvel[c, 1] + comega[c] * ox
+            pos[i, 0], pos[i, 1], vel[i, 0], vel[i, 1] = pebble_motion(
+                cpos[c, 0], cpos[c, 1], cvel[c, 0], cvel[c, 1], comega[c], cs, sn,
+                offset[i, 0], offset[i, 1])
             omega[i] = comega[c]
 
     @cuda.jit
