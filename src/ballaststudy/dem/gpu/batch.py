@@ -95,7 +95,9 @@ class Batch:
         self.n_balls = host["pos"].shape[0]
         self.n_segments = host["seg"].shape[0]
         self.moving = int(np.any(host["wvel"] != 0.0) or np.any(host["womega"] != 0.0))
-        self.steps = 0
+        self.steps = 0                # since the last to_simulations
+        self._clock_exported = 0      # steps, and breakage-log entries, already exported
+        self._log_exported = 0
         self._offsets = host.pop("offsets")
         self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
         self._bond_offsets = host.pop("bond_offsets")
@@ -218,48 +220,48 @@ class Batch:
         return [self.d[n].copy_to_host()[lo:hi] for n in names]
 
     def to_simulations(self, sims):
-        """Write positions, velocities, spins, forces, wall positions and reactions back
-        into the simulations the batch was made from (their step and time advance)."""
-        pos, vel, om, f = (self.d[n].copy_to_host() for n in ("pos", "vend", "wend", "force"))
-        seg, cen, wf, wm = (self.d[n].copy_to_host() for n in ("seg", "centre", "wforce",
-                                                                "wmoment"))
+        """Write the state back into the simulations the batch was made from: balls,
+        walls (positions, reactions), flat joints (state, the breakages since the last
+        call), clumps, and the contacts with their history as the CPU's Verlet lists.
+        Their step and time advance by the steps run since the last call."""
+        h = {k: v.copy_to_host() for k, v in self.d.items() if k in _EXPORTED}
+        n_log = int(h["logn"][0])
         for b, s in enumerate(sims):
             lo, hi = self._offsets[b], self._offsets[b + 1]
-            s.balls.pos[:] = pos[lo:hi]
-            s.balls.vel[:] = vel[lo:hi]
-            s.balls.omega[:] = om[lo:hi]
-            s.balls.force[:] = f[lo:hi, :2]
-            s.balls.moment[:] = f[lo:hi, 2]
+            s.balls.pos[:] = h["pos"][lo:hi]
+            s.balls.vel[:] = h["vend"][lo:hi]
+            s.balls.omega[:] = h["wend"][lo:hi]
+            s.balls.force[:] = h["force"][lo:hi, :2]
+            s.balls.moment[:] = h["force"][lo:hi, 2]
             w0, w1 = self._wall_offsets[b], self._wall_offsets[b + 1]
-            s.walls.seg[:] = seg[w0:w1]
-            s.walls.centre[:] = cen[w0:w1]
-            s.walls.force[:] = wf[w0:w1]
-            s.walls.moment[:] = wm[w0:w1]
-            self._bonds_to_cpu(s, b, lo)
+            for name, key in (("seg", "seg"), ("centre", "centre"), ("force", "wforce"),
+                              ("moment", "wmoment")):
+                getattr(s.walls, name)[:] = h[key][w0:w1]
             c0, c1 = self._clump_offsets[b], self._clump_offsets[b + 1]
-            for key, name in (("cpos", "pos"), ("cvel", "vel"), ("comega", "omega"),
-                              ("ctheta", "theta"), ("cforce", "force"), ("cmoment", "moment")):
-                getattr(s.clumps, name)[:] = self.d[key].copy_to_host()[c0:c1]
+            for name in ("pos", "vel", "omega", "theta", "force", "moment"):
+                getattr(s.clumps, name)[:] = h["c" + name][c0:c1]
+            self._bonds_to_cpu(h, s, b, n_log)
+            _lists_to_cpu(h, s, lo, hi, w0)
             s.cnt[0] += self.steps
             s.prm[P.TIME] += self.steps * s.prm[P.DT]
-            self._lists_to_cpu(s, lo, hi, w0)
+        self._log_exported = n_log
+        self._clock_exported += self.steps
         self.steps = 0
 
-    def _bonds_to_cpu(self, sim, b, lo):
-        """Case b's flat-joint state (side 0's copy) and the breakages since the batch was
-        made (in the CPU's order: step, bond, element) into ``sim``."""
+    def _bonds_to_cpu(self, h, sim, b, n_log):
+        """Case b's flat-joint state (side 0's copy) and its breakages logged since the
+        last export (in the CPU's order: step, bond, element) into ``sim``, before its
+        step advances."""
         bd = sim.bonds
         q0 = self._bond_offsets[b]
         q1 = q0 + len(bd)
         if q1 == q0:
             return
-        bsc, st, fn, fs, act = (self.d[k].copy_to_host()[0, q0:q1] for k in
-                                ("bsc", "bstate", "bfn", "bfs", "bactive"))
-        bd.theta[:], bd.moment[:] = bsc[:, 0], bsc[:, 1]
-        bd.state[:], bd.fn[:], bd.fs[:], bd.active[:] = st, fn, fs, act
-        n = int(self.d["logn"].copy_to_host()[0])
-        li = self.d["logi"].copy_to_host()[:n]
-        lf = self.d["logf"].copy_to_host()[:n]
+        bd.theta[:], bd.moment[:] = h["bsc"][0, q0:q1, 0], h["bsc"][0, q0:q1, 1]
+        bd.state[:], bd.fn[:] = h["bstate"][0, q0:q1], h["bfn"][0, q0:q1]
+        bd.fs[:], bd.active[:] = h["bfs"][0, q0:q1], h["bactive"][0, q0:q1]
+        li = h["logi"][self._log_exported:n_log]
+        lf = h["logf"][self._log_exported:n_log]
         mine = (li[:, 1] >= q0) & (li[:, 1] < q1)
         li, lf = li[mine], lf[mine]
         order = np.lexsort((li[:, 2], li[:, 1], li[:, 0]))
@@ -267,43 +269,50 @@ class Batch:
         log.ensure(k0 + len(order))
         for k, r in enumerate(order):
             q = int(li[r, 1]) - q0
-            step = int(sim.cnt[0] + li[r, 0])
+            since = int(li[r, 0]) - self._clock_exported    # the step since the last export
             i = int(bd.i[q])
-            row = dict(step=step, time=sim.prm[P.TIME] + li[r, 0] * sim.prm[P.DT], bond=q,
-                       elem=int(li[r, 2]), i=i, j=int(bd.j[q]), stone=int(sim.balls.stone[i]),
-                       mode=int(li[r, 3]), x=lf[r, 0], y=lf[r, 1], stress=lf[r, 2])
+            row = dict(step=int(sim.cnt[0]) + since, time=sim.prm[P.TIME] + since * sim.prm[P.DT],
+                       bond=q, elem=int(li[r, 2]), i=i, j=int(bd.j[q]),
+                       stone=int(sim.balls.stone[i]), mode=int(li[r, 3]), x=lf[r, 0],
+                       y=lf[r, 1], stress=lf[r, 2])
             for name, v in row.items():
                 getattr(log, name)[k0 + k] = v
         log.n[0] = k0 + len(order)
 
-    def _lists_to_cpu(self, sim, lo, hi, w0):
-        """The case's contacts and their history as the CPU's Verlet lists (i < j, grouped
-        by i), which its next rebuild (flagged here) carries over as its own."""
-        nb, nbn, nh, wl, wln, wh = (self.d[k].copy_to_host()[...] for k in
-                                    ("nb", "nbn", "nh", "wl", "wln", "wh"))
-        width = nh.shape[1]
-        total = nbn.shape[0]
-        slots = np.arange(MAX_NEIGHBOURS)
-        use = slots[None, :] < nbn[lo:hi, None]
-        i = np.broadcast_to(np.arange(lo, hi)[:, None], use.shape)
-        j = nb[:, lo:hi].T
-        keep = use & (j > i)
-        rows = (slots[None, :] * total + i)[keep]
-        pr = Pairs.empty(max(int(keep.sum()), 1), width)
-        pr.i[:keep.sum()] = i[keep] - lo
-        pr.j[:keep.sum()] = j[keep] - lo
-        pr.hist[:keep.sum()] = nh[rows]
-        pr.n[0] = keep.sum()
-        wslots = np.arange(MAX_WALLS)
-        wuse = wslots[None, :] < wln[lo:hi, None]
-        wi = np.broadcast_to(np.arange(lo, hi)[:, None], wuse.shape)
-        wp = WallPairs.empty(max(int(wuse.sum()), 1), width)
-        wp.i[:wuse.sum()] = wi[wuse] - lo
-        wp.s[:wuse.sum()] = wl[:, lo:hi].T[wuse] - w0
-        wp.hist[:wuse.sum()] = wh[(wslots[None, :] * total + wi)[wuse]]
-        wp.n[0] = wuse.sum()
-        sim.pairs, sim.wpairs = pr, wp
-        sim.cnt[2] = 1       # rebuilt (history carried) before the next CPU step
+
+# the device arrays to_simulations reads (each copied to the host once per call)
+_EXPORTED = ("pos", "vend", "wend", "force", "seg", "centre", "wforce", "wmoment", "cpos",
+             "cvel", "comega", "ctheta", "cforce", "cmoment", "bsc", "bstate", "bfn", "bfs",
+             "bactive", "logi", "logf", "logn", "nb", "nbn", "nh", "wl", "wln", "wh")
+
+
+def _lists_to_cpu(h, sim, lo, hi, w0):
+    """The contacts of the case of balls lo..hi and their history as the CPU's Verlet
+    lists (i < j, grouped by i), which its next rebuild (flagged here) carries over."""
+    width = h["nh"].shape[1]
+    total = h["nbn"].shape[0]
+    slots = np.arange(MAX_NEIGHBOURS)
+    use = slots[None, :] < h["nbn"][lo:hi, None]
+    i = np.broadcast_to(np.arange(lo, hi)[:, None], use.shape)
+    j = h["nb"][:, lo:hi].T
+    keep = use & (j > i)
+    n = int(keep.sum())
+    pr = Pairs.empty(max(n, 1), width)
+    pr.i[:n] = i[keep] - lo
+    pr.j[:n] = j[keep] - lo
+    pr.hist[:n] = h["nh"][(slots[None, :] * total + i)[keep]]
+    pr.n[0] = n
+    wslots = np.arange(MAX_WALLS)
+    wuse = wslots[None, :] < h["wln"][lo:hi, None]
+    wi = np.broadcast_to(np.arange(lo, hi)[:, None], wuse.shape)
+    m = int(wuse.sum())
+    wp = WallPairs.empty(max(m, 1), width)
+    wp.i[:m] = wi[wuse] - lo
+    wp.s[:m] = h["wl"][:, lo:hi].T[wuse] - w0
+    wp.hist[:m] = h["wh"][(wslots[None, :] * total + wi)[wuse]]
+    wp.n[0] = m
+    sim.pairs, sim.wpairs = pr, wp
+    sim.cnt[2] = 1       # rebuilt (history carried) before the next CPU step
 
 
 def _pack(sims):
