@@ -5,6 +5,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from ..biaxial_fast import FAST_LOADING
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -12,9 +14,7 @@ def _fast_config(folder):
     """The shipped config with absolute paths and 1000-step consolidation windows."""
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    cfg["rig"]["biaxial"]["loading"]["first_loading_inertial_number"] = 1.35e-4   # ~0.005 m/s: see
-    # tests/rig/test_biaxial.py (mechanics, not the config's quasi-static 1.5e-5)
+    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
     path = Path(folder) / "config.yaml"
     path.write_text(yaml.safe_dump(cfg))
     return path

@@ -11,6 +11,8 @@ import yaml
 from ballaststudy.cli import main
 from ballaststudy.config import ConfigError
 
+from ..biaxial_fast import FAST_LOADING
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -125,8 +127,7 @@ def test_case_run_takes_calibrated_parameters(small_library, tmp_path, capsys):
     good.write_text(yaml.safe_dump({"parameters": {"F_str_co": 7.0, "mu": 0.5}}))
     config = _config(tmp_path, lambda c: None)
     cfg = yaml.safe_load(config.read_text())
-    cfg["rig"]["biaxial"]["loading"].update(consolidation_window_steps=1000, deviator_max_kPa=60.0,
-                                            first_loading_inertial_number=1.35e-4)   # ~0.005 m/s
+    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING, deviator_max_kPa=60.0)
     config.write_text(yaml.safe_dump(cfg))
     out = tmp_path / "m" / "metrics.nc"
     assert main(["case", "run", str(asm), "--cycles", "1", "--parameters", str(good), "--config",

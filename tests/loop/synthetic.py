@@ -31,6 +31,8 @@ from ballaststudy.loop.select import chaos_covariance
 from ballaststudy.measured.importer import import_test
 from ballaststudy.rig.library import synthetic_library
 
+from ..biaxial_fast import FAST_LOADING
+
 POINTS = (11, 35)           # digitised points per curve, as in the shared measured data
 NOISE_SHARE = 0.01          # the digitiser's noise, sd as a share of the curve's final value
 
@@ -161,9 +163,7 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
         synthetic_library(**lib).to_netcdf(folder / "BPM.nc")
     cfg = yaml.safe_load(Path(config_file).read_text())
     cfg["databases_file"] = str(Path(config_file).parent / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    cfg["rig"]["biaxial"]["loading"]["first_loading_inertial_number"] = 1.35e-4   # ~0.005 m/s: see
-    # tests/rig/test_biaxial.py (mechanics, not the config's quasi-static 1.5e-5)
+    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
     cfg["loop"].update(cases=cases, cycles=cycles, design_sets=design_sets, refine_rounds=refine_rounds,
                        refine_sets=refine_sets, measurement_sd=1e-5,
                        posterior_samples=4096, specimen_share=float(specimen_share))

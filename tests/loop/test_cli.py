@@ -13,15 +13,15 @@ import yaml
 
 from ballaststudy.cli import main
 
+from ..biaxial_fast import FAST_LOADING
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def _config(folder, **loop):
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    cfg["rig"]["biaxial"]["loading"]["first_loading_inertial_number"] = 1.35e-4   # ~0.005 m/s: see
-    # tests/rig/test_biaxial.py (mechanics, not the config's quasi-static 1.5e-5)
+    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
     cfg["loop"].update(dict(cases=2, cycles=5, design_sets=2, refine_rounds=1, refine_sets=2,
                             effects=["end_restraint", "fouling"], measurement_sd=1e-4, posterior_samples=256), **loop)
     path = Path(folder) / "config.yaml"

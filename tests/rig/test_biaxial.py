@@ -11,12 +11,11 @@ from ballaststudy.rig.biaxial import (AXIAL, KPA, BiaxialParams, BiaxialRig, Bia
                                       assemble_biaxial, write_biaxial_outputs)
 from ballaststudy.rig.library import load_library
 
-# cycle 0 at I = 1.35e-4 (0.005 m/s on these coarse stones, the speed these tests were
-# written at): they check the rig's mechanics, not how slow is quasi-static (the config's
-# 1.5e-5, bench/first_loading_rate.py), which would cost them 10 x the steps
+from ..biaxial_fast import FAST_LOADING
+
 SMALL = dict(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000,
-             fill_area_ratio=0.9, consolidation_window_steps=1000, checkpoint_every=1,
-             deviator_min_kPa=10.0, deviator_max_kPa=60.0, first_loading_inertial_number=1.35e-4)
+             fill_area_ratio=0.9, checkpoint_every=1, deviator_min_kPa=10.0,
+             deviator_max_kPa=60.0, **FAST_LOADING)
 
 
 @pytest.fixture(scope="module")

@@ -31,6 +31,8 @@ from ballaststudy.scenario.modifiers import EFFECTS, MODIFIERS, covariate
 from ballaststudy.scenario.modifiers.abrasion import strong_balls, wear
 from ballaststudy.rig.biaxial import MEMBRANE, PLATEN, BiaxialParams, BiaxialRig, BiaxialRun
 
+from ..biaxial_fast import FAST_LOADING
+
 ROOT = Path(__file__).resolve().parents[2]
 STONES = (0, 1)
 MU, BETA = "mu", "beta_n"
@@ -54,9 +56,7 @@ def setup(small_library, tmp_path_factory):
     folder = tmp_path_factory.mktemp("effects")
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"]["consolidation_window_steps"] = 1000
-    cfg["rig"]["biaxial"]["loading"]["first_loading_inertial_number"] = 1.35e-4   # ~0.005 m/s: see
-    # tests/rig/test_biaxial.py (mechanics, not the config's quasi-static 1.5e-5)
+    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
     config = folder / "config.yaml"
     config.write_text(yaml.safe_dump(cfg))
     asm = folder / "assembled.nc"
