@@ -3,6 +3,7 @@
 d eps_a) to round-off; the inertial-number rate; on a small specimen the platen advances
 at that rate, the sides hold p while it dilates, and the envelope gathers the tests."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -79,3 +80,18 @@ def test_envelope_gathers_the_tests(strength, tmp_path, capsys):
     assert main(["case", "envelope", str(bad), "--out", str(tmp_path / "e2.nc"), "--quiet"]) == 2
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and f"{bad}: " in line and "expected a strength test" in line, line
+
+
+def test_the_test_stops_on_the_peak_it_reports(small_library):
+    """The softening check and the curve read q one way (peak.py): a test stopped past its
+    peak names the peak the curve reports."""
+    params = BiaxialParams(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000,
+                           fill_area_ratio=0.9, consolidation_window_steps=1000,
+                           softening_strain=0.003)
+    rig = assemble_biaxial(load_library(small_library), params, seed=7)
+    r = run_strength(rig, P / 1e3, inertial_number=1e-3, axial_strain_max=0.02)
+    m = re.search(r"q peaked at ([\d.]+) kPa \(axial strain ([\d.]+)\)", r.stop)
+    assert m, r.stop
+    assert r.peak_reached and float(m[1]) * 1e3 == pytest.approx(r.q_peak, rel=0.005)
+    assert float(m[2]) == pytest.approx(r.axial_strain_at_peak, abs=2e-4)
+    assert 0.003 <= r.axial_strain[-1] - r.axial_strain_at_peak < 0.006

@@ -16,6 +16,7 @@ from ...metrics.void_ratio import SolidCache
 from ..cyclic import CycleState, CyclicRun
 from .inertial import bulk_density, profile_speed, quasi_static_frequency, travel_time
 from .params import KPA
+from .peak import WINDOW_STRAIN, lookback_start, new_peak
 from .specimen import BiaxialRig, place_membrane
 
 AXIAL, LEFT, RIGHT, HEIGHT, X_LEFT, X_RIGHT = range(6)        # sensors (then the segments')
@@ -112,8 +113,9 @@ class BiaxialState(CycleState):
     prev_half_sample0: int = -1       # ... and where the one before it began
     failure: str = ""                 # why the specimen failed ("" = it did not)
     unloading_frequency: float = 0.0  # the sinusoid's, in this cycle's unloading
-    peak_stress: float = 0.0          # sigma_1's largest recent mean in this loading, its strain
-    peak_strain: float = 0.0
+    peak_stress: float = 0.0          # q's largest window mean [Pa] in this loading branch and
+    peak_strain: float = float("nan")  # the axial strain at the window's centre (peak.py)
+    watched_samples: int = 0          # the samples check_stalled has read in this branch
 
 
 class BiaxialRun(CyclicRun):
@@ -351,23 +353,24 @@ class BiaxialRun(CyclicRun):
     def check_stalled(self):
         """A stress-controlled specimen that cannot carry sigma_1 = p + q_max fails, as in the
         laboratory: its axial strain runs away. The run ends as a result, not an error, when
-        the axial strain reaches failure_axial_strain, or sigma_1 (mean of the last 50
-        samples) passed a peak below the bound and the specimen went on straining by
-        softening_strain (the peak strength of a strain-controlled test), or a cycle of the
-        sinusoid does not end within max_cycle_steps (not cycle 0: its profile moves the
-        platen on until the bound or failure_axial_strain, however many steps that takes at
-        its inertial number); ``failure`` says which, where and at what stress."""
+        the axial strain reaches failure_axial_strain, or the deviator q = sigma_1 - sigma_3
+        passed a peak below the bound and the specimen went on straining by softening_strain
+        (the peak strength of a strain-controlled test; q read as the strength test reads
+        it, its mean over peak.WINDOW_STRAIN of axial strain), or a cycle of the sinusoid does not end within
+        max_cycle_steps (not cycle 0: its profile moves the platen on until the bound or
+        failure_axial_strain, however many steps that takes at its inertial number);
+        ``failure`` says which, where and at what stress."""
         s, p = self.s, self.rig.params
         if s.phase not in ("loading", "cyclic"):
             return super().check_stalled()
-        ea, sig1 = self.strains()[0], float(np.mean(self.samples["axial_stress"][-50:]))
-        if sig1 > s.peak_stress:
-            s.peak_stress, s.peak_strain = sig1, ea
+        ea = self.strains()[0]
+        if s.peak_sample < 0:
+            self._watch_peak()
         steps = self.rig.sim.step - s.cycle_start_step
         if ea >= p.failure_axial_strain:
             why = f"axial strain {ea:.3f} reached failure_axial_strain {p.failure_axial_strain:g}"
         elif ea - s.peak_strain >= p.softening_strain and s.peak_sample < 0:
-            why = (f"sigma_1 peaked at {s.peak_stress / KPA:.1f} kPa (axial strain {s.peak_strain:.4f}) "
+            why = (f"q peaked at {s.peak_stress / KPA:.1f} kPa (axial strain {s.peak_strain:.4f}) "
                    f"and fell below it over a further softening_strain {p.softening_strain:g}")
         elif s.phase == "cyclic" and steps > p.max_cycle_steps:
             why = (f"the cycle between p + q_min and p + q_max = {p.confining_pressure_kPa + p.deviator_max_kPa:g} "
@@ -379,6 +382,34 @@ class BiaxialRun(CyclicRun):
                      f"{self.control.reading(AXIAL) / KPA:.1f} kPa at that moment")
         s.phase = "done"
 
+    def _watch_peak(self):
+        """The loading branch's peak of q (peak.new_peak) over the samples since the
+        last check, looking back (by doubling chunks) as far as their windows reach."""
+        s, S = self.s, self.samples
+        start, n = max(s.half_sample0, 0), len(S["step"])
+        first = max(s.watched_samples, start)
+        s.watched_samples = n
+        if first >= n:
+            return
+        bottom, y = self.rig.bottom_y(), S["platen_y"]
+
+        def strain(k0, k1):
+            return 1.0 - (np.asarray(y[k0:k1]) - bottom) / s.height0
+
+        back, e_first = 1024, strain(first, first + 1)[0]
+        k0 = max(start, first - back)
+        while k0 > start and strain(k0, first).min() > e_first - WINDOW_STRAIN:
+            back *= 2
+            k0 = max(start, first - back)
+        tail = strain(k0, n)
+        skip = lookback_start(tail, 0, first - k0)
+        k = k0 + skip
+        q = np.asarray(S["axial_stress"][k:n]) - 0.5 * (np.asarray(S["left_stress"][k:n])
+                                                        + np.asarray(S["right_stress"][k:n]))
+        m, at = new_peak(tail[skip:], q, first - k, origin=strain(start, start + 1)[0])
+        if m > s.peak_stress:
+            s.peak_stress, s.peak_strain = m, at
+
     def _trough(self):
         """The first trough after consolidation ends cycle 0 (N = 1 of a laboratory test: the
         first loading from p to p + q_max and the unloading to p + q_min)."""
@@ -388,7 +419,8 @@ class BiaxialRun(CyclicRun):
         if first:
             self._first_cycle_ended()
         self._branch_ended()
-        self.s.peak_stress = 0.0        # each loading branch is watched for softening anew
+        self.s.peak_stress, self.s.peak_strain = 0.0, np.nan   # each loading branch is
+        self.s.watched_samples = 0                              # watched for softening anew
         s, k0, peak = self.s, self.s.cycle_sample0, self.s.half_sample0
         if s.phase == "loading":
             s.phase = "cyclic"

@@ -44,7 +44,7 @@ class BiaxialParams(DepositionParams):
     braking_fraction: float = 0.25     # ... over the last 25 % of the range
     realtime_added_inertia_max: float = 0.0     # real time: density scaling adds at most this
     failure_axial_strain: float = 0.15   # a stress-controlled specimen beyond this has failed
-    softening_strain: float = 0.02       # ... or once sigma_1 fell past its peak over this strain
+    softening_strain: float = 0.02       # ... or once q fell past its peak over this strain (peak.py)
     cycles: int = 100
     control_every: int = 10
     loading_dt_factor: float = 2.0

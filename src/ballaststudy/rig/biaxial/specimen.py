@@ -59,9 +59,12 @@ class BiaxialRig(Rig):
         heights), as the area correction of a triaxial test."""
         return float(np.mean(self.side_x("right") - self.side_x("left")))
 
+    def bottom_y(self):
+        """y of the bottom platen's face (it does not move)."""
+        return float(self.sim.walls.seg[self.layout.bottom[0], 1])
+
     def height(self):
-        seg = self.sim.walls.seg
-        return float(seg[self.layout.top[0], 1] - seg[self.layout.bottom[0], 1])
+        return float(self.sim.walls.seg[self.layout.top[0], 1]) - self.bottom_y()
 
     def stresses(self):
         """(sigma_axial at the top platen, sigma_left, sigma_right) [Pa], compression +."""

@@ -10,11 +10,9 @@ The rate is the strain rate of inertial number ``inertial_number`` (config
 strength.inertial_number, 1e-3; inertial.py), with the quasi-static mode's density scaling
 (loading_dt_factor: inertia added to the smallest balls only). That rate is not shown
 quasi-static: at p = 30 kPa one of two 0.15 x 0.30 m box_test specimens peaked at phi = 52
-and 42 deg at I = 1e-3 and 1e-4, the other at 62 deg at both (bench/strength_table.py). At
-1.5e-5 the first stopped at 2 % strain, past an early peak (sigma_1 159 kPa at 0.04 %, then
-a collapse to ~15 kPa) that the curve's 0.002-strain means, on which phi_peak is read, do
-not show: check_stalled judges softening on the mean of 50 samples, about 1e-4 of strain
-at I = 1e-3 but 1e-6 at 1.5e-5 (the stop and the peak must be read on one measure)."""
+and 42 deg at I = 1e-3 and 1e-4, the other at 62 deg at both (bench/strength_table.py).
+q is read as its mean over peak.WINDOW_STRAIN of axial strain, the measure on which the
+test also stops past its peak (BiaxialRun.check_stalled)."""
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -24,8 +22,8 @@ from ...metrics.strain import specimen_strains
 from .inertial import inertial_strain_rate, stone_size_and_density
 from .loading import BiaxialRun
 from .params import KPA
+from .peak import WINDOW_STRAIN, window_mean
 
-SMOOTH_STRAIN = 0.002        # q is read as its mean over this axial-strain window
 DILATANCY_STRAIN = 0.005     # d eps_v / d eps_a: a line over +- this around the peak
 
 
@@ -92,26 +90,17 @@ def run_strength(rig, p_kPa, inertial_number=1e-3, axial_strain_max=0.10, side_g
 
 def _curve(run, k0):
     """(axial strain, volumetric strain, q, sigma_3) from the loading's samples, one point
-    per 1e-4 of axial strain, q and sigma_3 as their means over SMOOTH_STRAIN of it (the
-    running maximum of the axial strain orders the samples: the platen only advances)."""
+    per 1e-4 of axial strain, q and sigma_3 as their means over WINDOW_STRAIN of it
+    (peak.window_mean)."""
     s, S = run.s, {k: np.asarray(v[k0:]) for k, v in run.samples.items()}
-    bottom = float(run.rig.sim.walls.seg[run.rig.layout.bottom[0], 1])
-    h, w = S["platen_y"] - bottom, S["right_x"] - S["left_x"]
+    h, w = S["platen_y"] - run.rig.bottom_y(), S["right_x"] - S["left_x"]
     ea, ev = specimen_strains(h, w, s.height0, s.width0)
     order = np.maximum.accumulate(ea)
     keep = np.unique(np.searchsorted(order, np.arange(0.0, order[-1], 1e-4)))
     sig3 = 0.5 * (S["left_stress"] + S["right_stress"])
     q = S["axial_stress"] - sig3
-    return (ea[keep], ev[keep], _window_mean(order, q, order[keep]),
-            _window_mean(order, sig3, order[keep]))
-
-
-def _window_mean(order, x, at):
-    """Mean of x over the samples within SMOOTH_STRAIN / 2 of each ``at``."""
-    c = np.concatenate([[0.0], np.cumsum(x)])
-    lo = np.searchsorted(order, at - 0.5 * SMOOTH_STRAIN)
-    hi = np.maximum(np.searchsorted(order, at + 0.5 * SMOOTH_STRAIN, side="right"), lo + 1)
-    return (c[hi] - c[lo]) / (hi - lo)
+    return (ea[keep], ev[keep], window_mean(order, q, order[keep]),
+            window_mean(order, sig3, order[keep]))
 
 
 def _peak(ea, ev, q, sig3):
@@ -124,7 +113,7 @@ def _peak(ea, ev, q, sig3):
     psi = np.degrees(np.arcsin(np.clip(-r / (2.0 - r), -1.0, 1.0)))
     seated = ea[np.argmax(q >= 0.1 * q[k])]
     return (float(q[k]), float(phi), float(ea[k]), float(psi),
-            bool(k < q.size - 1 and ea[-1] - ea[k] > SMOOTH_STRAIN), float(seated))
+            bool(k < q.size - 1 and ea[-1] - ea[k] > WINDOW_STRAIN), float(seated))
 
 
 CURVES = {   # variable: (result field, units, long name)
@@ -132,9 +121,9 @@ CURVES = {   # variable: (result field, units, long name)
                      "compression positive"),
     "volumetric_strain": ("volumetric_strain", "1", "volumetric (2D: area) strain 1 - W H / (W0 H0), "
                           "compression positive"),
-    "deviator_stress": ("deviator", "Pa", f"deviator q = sigma_1 - sigma_3, mean over {SMOOTH_STRAIN:g} "
+    "deviator_stress": ("deviator", "Pa", f"deviator q = sigma_1 - sigma_3, mean over {WINDOW_STRAIN:g} "
                         "of axial strain"),
-    "confining_stress": ("confining", "Pa", f"sigma_3 (mean of the sides), mean over {SMOOTH_STRAIN:g} "
+    "confining_stress": ("confining", "Pa", f"sigma_3 (mean of the sides), mean over {WINDOW_STRAIN:g} "
                          "of axial strain")}
 PEAK_UNITS = {"q_peak": "Pa", "phi_peak_deg": "degree", "axial_strain_at_peak": "1",
               "dilatancy_angle_deg": "degree", "peak_reached": "1", "seating_strain": "1",
