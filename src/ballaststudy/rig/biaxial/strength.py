@@ -7,11 +7,13 @@ volumetric strain, and at the peak q_peak, the friction angle phi_peak
 (2D: sin psi = -r / (2 - r), r = d eps_v / d eps_a, compression positive).
 
 The rate is the strain rate of inertial number ``inertial_number`` (config
-strength.inertial_number, 1e-3; inertial.py), with the quasi-static mode's density scaling
-(loading_dt_factor: inertia added to the smallest balls only). That rate is not shown
-quasi-static: at p = 30 kPa one of two 0.15 x 0.30 m box_test specimens peaked at phi = 52
-and 42 deg at I = 1e-3 and 1e-4, the other at 62 deg at both (bench/strength_table.py).
-q is read as its mean over peak.WINDOW_STRAIN of axial strain, the measure on which the
+strength.inertial_number, 1.5e-5; inertial.py), with the quasi-static mode's density scaling
+(loading_dt_factor: inertia added to the smallest balls only). phi_peak depends on it: on
+three 0.15 x 0.30 m box_test specimens (bench/strength_table.py, seeds 1-3, mu 0.7) the
+mean phi_peak at I = 1e-3 / 1e-4 / 1.5e-5 was 56.8 / 47.8 / 48.3 deg at p = 30 kPa
+(converged below 1e-4: each seed within 1 deg) and 53.2 / 44.1 / 40.4 at p = 60 kPa (not
+converged: 2.4-5.9 deg per seed between the last two). 1.5e-5, the first loading's bound
+(first_loading_inertial_number), is the slowest rate measured. q is read as its mean over peak.WINDOW_STRAIN of axial strain, the measure on which the
 test also stops past its peak (BiaxialRun.check_stalled)."""
 from dataclasses import asdict, dataclass
 
@@ -47,7 +49,7 @@ class StrengthResult:
     stop: str
 
 
-def run_strength(rig, p_kPa, inertial_number=1e-3, axial_strain_max=0.10, side_gain=1.0e-3,
+def run_strength(rig, p_kPa, inertial_number, axial_strain_max=0.10, side_gain=1.0e-3,
                  side_integral_steps=500, progress=None):
     """Consolidate ``rig`` (assembled, not loaded) to p, then compress at the inertial
     number's strain rate until axial_strain_max or past the peak by the rig's
