@@ -11,7 +11,7 @@ import numpy as np
 from ...dem.control import Control
 from ...metrics.biaxial import compute_biaxial_cycle
 from ...metrics.cycle import MetricsParams
-from ...metrics.strain import specimen_strains
+from ...metrics.strain import axial_strain, specimen_strains
 from ...metrics.void_ratio import SolidCache
 from ..cyclic import CycleState, CyclicRun
 from .inertial import bulk_density, profile_speed, quasi_static_frequency, travel_time
@@ -356,10 +356,10 @@ class BiaxialRun(CyclicRun):
         the axial strain reaches failure_axial_strain, or the deviator q = sigma_1 - sigma_3
         passed a peak below the bound and the specimen went on straining by softening_strain
         (the peak strength of a strain-controlled test; q read as the strength test reads
-        it, its mean over peak.WINDOW_STRAIN of axial strain), or a cycle of the sinusoid does not end within
-        max_cycle_steps (not cycle 0: its profile moves the platen on until the bound or
-        failure_axial_strain, however many steps that takes at its inertial number);
-        ``failure`` says which, where and at what stress."""
+        it, its mean over peak.WINDOW_STRAIN of axial strain), or a cycle of the sinusoid
+        does not end within max_cycle_steps (not cycle 0: its profile moves the platen on
+        until the bound or failure_axial_strain, however many steps that takes at its
+        inertial number); ``failure`` says which, where and at what stress."""
         s, p = self.s, self.rig.params
         if s.phase not in ("loading", "cyclic"):
             return super().check_stalled()
@@ -394,7 +394,7 @@ class BiaxialRun(CyclicRun):
         bottom, y = self.rig.bottom_y(), S["platen_y"]
 
         def strain(k0, k1):
-            return 1.0 - (np.asarray(y[k0:k1]) - bottom) / s.height0
+            return axial_strain(np.asarray(y[k0:k1]) - bottom, s.height0)
 
         back, e_first = 1024, strain(first, first + 1)[0]
         k0 = max(start, first - back)
