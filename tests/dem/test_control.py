@@ -212,3 +212,64 @@ def test_control_state_restarts_bitwise(tmp_path):
     assert np.array_equal(a.clumps.pos, b.clumps.pos)
     assert np.array_equal(a.balls.vel, b.balls.vel)
     assert np.array_equal(ca.arrays.cst, cb.arrays.cst)
+
+
+def platen_on_fixed_ball(gamma_n=0.0, gap=0.0):
+    """A ball too heavy to move (a fixed spring k_n) against the left wall; the right wall,
+    ``gap`` from it, is the platen a SINE controller drives. No damping unless asked."""
+    law = dict(HOOKE, gamma_n=gamma_n, gamma_t=0.0)
+    sim = Simulation(gravity=(0, 0), damping=0.0, law="hooke", dt=1e-5, hooke=law,
+                     domain=(-0.1, -0.1, 0.1, 0.1))
+    sim.add_wall([(-R, -0.05), (-R, 0.05)])
+    right = sim.add_wall([(R + gap, -0.05), (R + gap, 0.05)])
+    sim.add_balls([0.0], [0.0], [R], 1.0e12)
+    return sim, right
+
+
+def driven(sim, right, lo, hi, frequency, mass, gain=1.0, every=1):
+    c = Control(every=every, capacity=20000)
+    sensor = c.wall_force(right, axis=0)
+    k = c.sine(sensor, c.walls(right, axis=0), lo=lo, hi=hi, frequency=frequency, gain=gain,
+               v_max=1.0, integral_steps=0, areal_mass=mass)
+    c.build()
+    c.set(k, t0=0.0)
+    return c, sensor
+
+
+@pytest.mark.parametrize("mass", [10.0, 2.5])
+def test_driven_platen_oscillates_on_its_spring(mass):
+    """A platen of mass M put on a spring k_n with a load F0 applied at once (undamped): the
+    spring force swings to 2 F0 at t = pi sqrt(M / k_n) and back to 0 (the load's impulse
+    equals the platen's momentum): peak within 1 %, its time within 2 %."""
+    f0 = 100.0
+    sim, right = platen_on_fixed_ball()
+    c, sensor = driven(sim, right, f0, f0, 1.0e-3, mass)
+    sim.run(int(1.2 * np.pi * np.sqrt(mass / KN) / sim.dt), control=c)
+    rows = c.drain()
+    k = int(np.argmax(rows[:, 1 + sensor]))
+    assert rows[k, 1 + sensor] == pytest.approx(2 * f0, rel=0.01)
+    assert rows[k, 0] * sim.dt == pytest.approx(np.pi * np.sqrt(mass / KN), rel=0.02)
+
+
+@pytest.mark.parametrize("gain, within", [(1.0, True), (-1.0, False)])
+def test_driven_platen_follows_the_applied_load(gain, within):
+    """The platen (M = 0.05 kg, its resonance on k_n at 710 Hz), pressed at rest by 50 N,
+    loaded 50-150 N at 5 Hz: over a period its reading (the spring's force) follows the
+    load within 0.5 % of the range (its inertial part M a is ~1e-5 of it) and it ends at
+    F / k_n of overlap; driven the wrong way (gain < 0) it leaves the ball."""
+    lo, hi, f, mass = 50.0, 150.0, 5.0, 0.05
+    sim, right = platen_on_fixed_ball(gap=-lo / KN)
+    c, sensor = driven(sim, right, lo, hi, f, mass, gain=gain, every=10)
+    rows = []
+    while sim.step < 20000:                  # one period
+        sim.run(20000 - sim.step, control=c)
+        rows.append(c.drain())
+        c.clear_event()
+    rows = np.concatenate(rows)
+    t = rows[:, 0] * sim.dt
+    target = lo + 0.5 * (hi - lo) * (1.0 - np.cos(2.0 * np.pi * f * t))
+    error = np.abs(rows[:, 1 + sensor] - target).max() / (hi - lo)
+    assert (error < 0.005) == within, error
+    if within:
+        overlap = R - sim.walls.seg[right[0], 0]
+        assert overlap == pytest.approx(lo / KN, rel=0.01)

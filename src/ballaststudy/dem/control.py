@@ -31,7 +31,13 @@ Controllers:
           lo + (hi - lo) (1 - cos(2 pi f (t - t0))) / 2 in simulated time t, from lo at t0,
           plus a feed-forward -C d(target)/dt with the actuator's compliance C [m per
           reading unit] (0: none; the rig sets it from what it measures); events at its
-          half periods (PEAK at the maxima, TROUGH at the minima).
+          half periods (PEAK at the maxima, TROUGH at the minima). With an ``areal_mass``
+          mu > 0 it drives a platen instead: the actuator is a body of mu [mass per reading
+          unit of force: kg/m^2 for a stress] under the target as an applied load, its
+          velocity integrated every step from a = (reading - target) / mu (towards +axis
+          for a positive gain), so the reading (the contacts' load on it) follows the
+          target up to the platen's inertia mu a, whatever the specimen's compliance: a
+          stress boundary, as the load of a force-controlled actuator on the top cap.
 
 All arrays live in one named container (``ControlArrays``); the ``Control`` class builds it
 and saves/restores it (rigs keep it in their checkpoints).
@@ -60,10 +66,11 @@ TARGET, GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, WINDOW_STEPS, TOUCH = range(7)
 LO, HI, VMIN, BRAKE = 0, 1, 2, 4          # CYCLIC: VMAX = 3 as above
 SINE_LO, SINE_HI, FREQUENCY = 5, 6, 7     # SINE: GAIN ... INTEGRAL_STEPS as SERVO
 COMPLIANCE = 0                            # SINE: the feed-forward's (TARGET's slot)
+AREAL_MASS = 8                            # SINE: its platen's (0: the PI servo drives)
 INTEGRAL, TOUCHED, APPROACH_STEPS, WINDOW_DONE = range(4)
 HALF_PERIODS, T0, NOW = 1, 2, 3           # SINE state (INTEGRAL = 0 as SERVO)
 DIRECTION = 0
-NPAR, NST = 8, 4
+NPAR, NST = 9, 4
 assert VMAX == 3
 
 _STATE = {"integral": INTEGRAL, "touched": TOUCHED, "approach_steps": APPROACH_STEPS,
@@ -73,7 +80,7 @@ _SERVO_PAR = {"target": TARGET, "gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": V
 _CYCLIC_PAR = {"lo": LO, "hi": HI, "v_min": VMIN, "v_max": VMAX, "brake": BRAKE}
 _SINE_PAR = {"gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": VMAX,
              "integral_steps": INTEGRAL_STEPS, "lo": SINE_LO, "hi": SINE_HI,
-             "frequency": FREQUENCY, "compliance": COMPLIANCE}
+             "frequency": FREQUENCY, "compliance": COMPLIANCE, "areal_mass": AREAL_MASS}
 _SINE_STATE = {"integral": INTEGRAL, "half_periods": HALF_PERIODS, "t0": T0, "now": NOW}
 
 ControlArrays = namedtuple(
@@ -82,23 +89,28 @@ ControlArrays = namedtuple(
 
 # ------------------------------------------------------------------------- kernels
 @njit(**NO_NRT)
+def sensor_reading(prm, clumps, walls, c, s):
+    kind, a, b, ax = c.sensors[s, 0], c.sensors[s, 1], c.sensors[s, 2], c.sensors[s, 3]
+    if kind == CLUMP_REACTION:
+        v = clumps.force[a, ax] - clumps.mass[a] * prm[P.GX + ax]
+    elif kind == CLUMP_POSITION:
+        v = clumps.pos[a, ax]
+    elif kind == WALL_FORCE:
+        v = 0.0
+        for m in range(a, b):
+            v += walls.force[c.members[m], ax]
+    else:
+        v = 0.0
+        for m in range(a, b):
+            v += walls.seg[c.members[m], ax] + walls.seg[c.members[m], 2 + ax]
+        v *= 0.5 / (b - a)
+    return c.scale[s] * v
+
+
+@njit(**NO_NRT)
 def read_sensors(prm, clumps, walls, c):
     for s in range(c.sensors.shape[0]):
-        kind, a, b, ax = c.sensors[s, 0], c.sensors[s, 1], c.sensors[s, 2], c.sensors[s, 3]
-        if kind == CLUMP_REACTION:
-            v = clumps.force[a, ax] - clumps.mass[a] * prm[P.GX + ax]
-        elif kind == CLUMP_POSITION:
-            v = clumps.pos[a, ax]
-        elif kind == WALL_FORCE:
-            v = 0.0
-            for m in range(a, b):
-                v += walls.force[c.members[m], ax]
-        else:
-            v = 0.0
-            for m in range(a, b):
-                v += walls.seg[c.members[m], ax] + walls.seg[c.members[m], 2 + ax]
-            v *= 0.5 / (b - a)
-        c.val[s] = c.scale[s] * v
+        c.val[s] = sensor_reading(prm, clumps, walls, c, s)
 
 
 @njit(**NO_NRT)
@@ -143,7 +155,12 @@ def _sine_update(c, k, time):
 
 @njit(**NO_NRT)
 def sine_target(par, st):
-    phase = 2.0 * math.pi * par[FREQUENCY] * (st[NOW] - st[T0])
+    return sine_target_at(par, st, st[NOW])
+
+
+@njit(**NO_NRT)
+def sine_target_at(par, st, time):
+    phase = 2.0 * math.pi * par[FREQUENCY] * (time - st[T0])
     return par[SINE_LO] + 0.5 * (par[SINE_HI] - par[SINE_LO]) * (1.0 - math.cos(phase))
 
 
@@ -182,11 +199,34 @@ def controller_velocity(c, k):
 
 
 @njit(**NO_NRT)
+def drives_platen(c, k):
+    return c.ctl[k, 0] == SINE and c.cpar[k, AREAL_MASS] > 0.0
+
+
+@njit(**NO_NRT)
+def drive_platens(prm, clumps, walls, c):
+    """Every step: the velocity of each driven platen (a SINE with an areal mass) for the
+    next step, from the load on it now (symplectic Euler, as the balls: stable while its
+    contacts' stiffness over its mass stays below (2 / dt)^2)."""
+    for k in range(c.ctl.shape[0]):
+        if c.ctl[k, 3] == 0 or not drives_platen(c, k):
+            continue
+        par = c.cpar[k]
+        load = sensor_reading(prm, clumps, walls, c, c.ctl[k, 1])
+        accel = math.copysign(1.0, par[GAIN]) * (load - sine_target_at(par, c.cst[k], prm[P.TIME])) / par[AREAL_MASS]
+        a, b, ax = c.actuators[c.ctl[k, 2], 1], c.actuators[c.ctl[k, 2], 2], c.actuators[c.ctl[k, 2], 3]
+        v = walls.vel[c.members[a], ax] + prm[P.DT] * accel
+        for m in range(a, b):
+            walls.vel[c.members[m], ax] = v
+
+
+@njit(**NO_NRT)
 def actuate(clumps, walls, c):
-    """Impose every active controller's velocity on its actuator."""
+    """Impose every active controller's velocity on its actuator (a driven platen's is
+    its own: drive_platens)."""
     c.cfg[PENDING] = 0
     for k in range(c.ctl.shape[0]):
-        if c.ctl[k, 3] == 0:
+        if c.ctl[k, 3] == 0 or drives_platen(c, k):
             continue
         v = controller_velocity(c, k)
         kind, a, b, ax = (c.actuators[c.ctl[k, 2], 0], c.actuators[c.ctl[k, 2], 1],
@@ -205,6 +245,7 @@ def actuate(clumps, walls, c):
 def control_step(prm, step, clumps, walls, c):
     """Once every ``every`` steps, after the step: read, sample, update; impose the
     velocities unless an event asks Python first. Returns True on an event."""
+    drive_platens(prm, clumps, walls, c)
     c.cfg[COUNT] += 1
     if c.cfg[COUNT] < c.cfg[EVERY]:
         return False
@@ -311,12 +352,13 @@ class Control:
         return k
 
     def sine(self, sensor, actuator, lo, hi, frequency, gain, v_max, integral_steps,
-             gain_unit=1.0, active=True):
+             gain_unit=1.0, active=True, areal_mass=0.0):
         """Real-time sinusoid from lo to hi at ``frequency`` [Hz] (t0: ``set(k, t0=...)``
-        when it starts; the servo part as ``servo``)."""
+        when it starts; the servo part as ``servo``; areal_mass > 0: it drives a platen of
+        that mass per reading unit of force instead, the sign of ``gain`` its direction)."""
         par = np.zeros(NPAR)
-        par[[GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, SINE_LO, SINE_HI, FREQUENCY]] = (
-            gain, gain_unit, v_max, integral_steps, lo, hi, frequency)
+        par[[GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, SINE_LO, SINE_HI, FREQUENCY, AREAL_MASS]] = (
+            gain, gain_unit, v_max, integral_steps, lo, hi, frequency, areal_mass)
         return self._add(SINE, sensor, actuator, active, par)
 
     def _add(self, kind, sensor, actuator, active, par):
@@ -425,6 +467,8 @@ class Control:
 
     def load(self, d, prefix="control_"):
         """Restore the arrays saved by ``to_dict`` (the same controllers built)."""
-        self.arrays = ControlArrays(*(np.array(d[prefix + n]) for n in ControlArrays._fields))
+        a = {n: np.array(d[prefix + n]) for n in ControlArrays._fields}
+        a["cpar"] = np.pad(a["cpar"], ((0, 0), (0, NPAR - a["cpar"].shape[1])))  # older: 8
+        self.arrays = ControlArrays(**a)
         self.every = int(self.arrays.cfg[EVERY])
         return self

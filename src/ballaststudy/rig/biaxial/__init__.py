@@ -11,10 +11,12 @@ specimen bulges as a real one does (the segments' heights follow the platens: ea
 1. deposition in a tall box of the specimen's width; balls above the specimen height cut;
 2. isotropic consolidation: three stress servos (left, right, top) hold p until the
    window means of all three are within ``consolidation_tolerance`` of p;
-3. cyclic loading: the side servos keep p; the top platen drives the axial stress
-   sigma_1 = p + q between p + q_min and p + q_max with a stress servo following a
-   sinusoid in simulated time, plus a feed-forward from the compliance it measures per
-   branch and bounds adapted cycle by cycle — real time: at the test's frequency f (a
+3. cyclic loading: the side servos keep p; the axial stress sigma_1 = p + q runs between
+   p + q_min and p + q_max as a sinusoid in simulated time, applied as a load to the top
+   platen, a body of platen_mass_ratio x the specimen's mass (``axial_control``
+   applied_force: a stress boundary), or followed by a stress servo moving the platen
+   with a feed-forward from the compliance it measures per branch (servo); bounds
+   adapted cycle by cycle — real time: at the test's frequency f (a
    cycle lasts 1/f), true masses but for realtime_added_inertia_max of density scaling;
    quasi-static: at the largest f the inertial-number and stress-wave bounds allow
    (``inertial``), with density scaling (loading_dt_factor), its first loading the

@@ -136,6 +136,8 @@ class BiaxialRun(CyclicRun):
         self._metrics_setup()
         if p.mode not in ("quasi_static", "real_time"):
             raise ValueError(f"loading mode {p.mode!r}: quasi_static or real_time")
+        if p.axial_control not in ("applied_force", "servo"):
+            raise ValueError(f"axial_control {p.axial_control!r}: applied_force or servo")
         if p.loading_dt_factor > 1.0 and not resumed:   # at rest while consolidating
             rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
@@ -147,12 +149,22 @@ class BiaxialRun(CyclicRun):
         self.solid_cache = SolidCache(self.metrics_params.solid_reuse_tolerance)
 
     def _rescale(self):
-        """Stress sensors follow the specimen's current size."""
+        """Stress sensors follow the specimen's current size (a driven platen's mass per
+        loaded area too)."""
         c, t = self.control, self.rig.sim.thickness
         w, h = self.rig.width(), self.rig.height()
         c.set_scale(AXIAL, 1.0 / (w * t))
         c.set_scale(LEFT, -1.0 / (h * t))
         c.set_scale(RIGHT, 1.0 / (h * t))
+        if c.get(self.ids.sine, "areal_mass") > 0.0:
+            c.set(self.ids.sine, areal_mass=self.platen_mass() / (w * t))
+
+    def platen_mass(self):
+        """The driven top platen's mass [kg]: platen_mass_ratio x the specimen's balls'
+        inertial mass (density scaling's included: the platen's step stays as stable as
+        the balls', its stiffness over its mass below that of the balls it touches)."""
+        b = self.rig.sim.balls
+        return self.rig.params.platen_mass_ratio * float((1.0 / b.minv[b.alive]).sum())
 
     # --------------------------------------------------------------- events
     def advance(self, max_steps=None):
@@ -235,6 +247,9 @@ class BiaxialRun(CyclicRun):
         c.set(self.ids.profile, active=False)
         c.set(self.ids.sine, active=True, half_periods=0, integral=0.0, compliance=0.0,
               t0=self.rig.sim.time)
+        if self.rig.params.axial_control == "applied_force":
+            c.set(self.ids.sine, areal_mass=1.0)      # on: _rescale sets its value
+            self._rescale()
 
     def _at_rest(self):
         """Whether the axial strain rate since the last window is below
