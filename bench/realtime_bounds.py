@@ -4,7 +4,7 @@ largest and smallest axial stress of each cycle against p + q_max and p + q_min.
     NUMBA_NUM_THREADS=1 python bench/realtime_bounds.py [--frequencies 5 20 60] [--cycles 5]
         [--seed 1] [--width 0.15 --height 0.30] [--deviator-min 15 --deviator-max 80]
         [--library BPM.nc | --assembled RIG.nc] [--config config/config.yaml] [--no-feed-forward]
-        [--axial-control applied_force servo]
+        [--load-control applied_force servo]
 
 One specimen (box_test's library at the config's resolution, bench/case_benchmark.py, or
 --library) assembled once; each frequency consolidates and cycles a copy of it in
@@ -34,7 +34,7 @@ def main(argv=None):
     ap.add_argument("--assembled", help="an assembled specimen (BiaxialRig.save) instead of assembling one")
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--no-feed-forward", action="store_true", help="the servo alone")
-    ap.add_argument("--axial-control", nargs="+", choices=["applied_force", "servo"],
+    ap.add_argument("--load-control", nargs="+", choices=["applied_force", "servo"],
                     help="default: the config's")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -52,14 +52,14 @@ def main(argv=None):
     path = a.assembled or Path(tempfile.mkdtemp()) / "assembled.nc"
     if not a.assembled:
         assemble_biaxial(load_library(a.library or box_test_library(a.config)), params, seed=a.seed).save(path)
-    controls = a.axial_control or [params.axial_control]
+    controls = a.load_control or [params.load_control]
     for control, f in ((c, f) for c in controls for f in a.frequencies):
         rig = BiaxialRig.load(path)
         rig.params = params_from_config("biaxial", cfg.get("rig", {}))
         p = rig.params
         p.mode, p.frequency_Hz, p.sine_feed_forward = "real_time", f, not a.no_feed_forward
         p.deviator_min_kPa, p.deviator_max_kPa = a.deviator_min, a.deviator_max
-        p.axial_control = control
+        p.load_control = control
         t = time.perf_counter()
         run = BiaxialRun(rig, cycles=a.cycles).run()
         lo, hi = p.axial_bounds_Pa

@@ -3,7 +3,7 @@
     NUMBA_NUM_THREADS=1 python bench/strength_table.py [--seeds 1 2] [--p 30]
         [--mu-r 0 0.1 0.3] [--mu 0.5 0.7 0.9] [--width 0.15 --height 0.30]
         [--library BPM.nc] [--config config/config.yaml] [--strain 0.10]
-        [--inertial-number 1e-3 1e-4]
+        [--inertial-number 1e-3 1e-4] [--load-control applied_force servo]
 
 Each seed's specimen is assembled once with the law's rolling sub-model at mu_r = 0 (the
 law without rolling, tests/dem/test_rolling.py), then every (mu_r, mu) is set on it by the
@@ -11,7 +11,7 @@ modifiers (common random numbers: the rows differ by the values only) and the st
 test (rig/biaxial/strength.py, the config's strength section) runs at p, at each
 --inertial-number (default the config's: is the strength rate-independent there?). Prints
 one row per (I, mu_r, mu): phi_peak per seed, mean, q_peak, dilatancy angle, and how far the
-side servos let sigma_3 stray from p (its largest |sigma_3 - p| / p after seating, on the
+sides let sigma_3 stray from p (its largest |sigma_3 - p| / p after seating, on the
 curve's means over 0.002 axial strain). Uses box_test's library at the
 config's resolution (bench/case_benchmark.py builds and caches it). Never a test."""
 import argparse
@@ -36,6 +36,8 @@ def main(argv=None):
     ap.add_argument("--strain", type=float, help="axial_strain_max (config's strength section)")
     ap.add_argument("--library", help="a BPM.nc (default: box_test's, built once)")
     ap.add_argument("--inertial-number", type=float, nargs="+", help="(config's strength one)")
+    ap.add_argument("--load-control", nargs="+", choices=["applied_force", "servo"],
+                    help="the sides' p while compressing (default: the config's)")
     ap.add_argument("--config", default="config/config.yaml")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -61,14 +63,17 @@ def main(argv=None):
         assemble_biaxial(lib, params, seed=seed).save(folder / f"s{seed}.nc")
         print(f"seed {seed}: assembled in {time.perf_counter() - t:.0f} s", flush=True)
     print(f"p = {a.p:g} kPa, {a.width:g} x {a.height:g} m")
-    print("| I | mu_r | mu | phi_peak per seed [deg] | phi_peak mean | q_peak mean [kPa] | psi mean [deg] "
+    print("| sides | I | mu_r | mu | phi_peak per seed [deg] | phi_peak mean | q_peak mean [kPa] | psi mean [deg] "
           "| sigma_3 error max | s per test |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for inertial, mu_r, mu in itertools.product(a.inertial_number or [st["inertial_number"]], a.mu_r, a.mu):
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    controls = a.load_control or [params.load_control]
+    for control, inertial, mu_r, mu in itertools.product(controls, a.inertial_number or [st["inertial_number"]],
+                                                         a.mu_r, a.mu):
         res, t = [], time.perf_counter()
         for seed in a.seeds:
             rig = BiaxialRig.load(folder / f"s{seed}.nc")
             rig.params = params_from_config("biaxial", cfg.get("rig", {}))
+            rig.params.load_control = control
             MODIFIERS["mu_r"].apply(rig, {"mu_r": mu_r})
             MODIFIERS["mu"].apply(rig, {"mu": mu})
             res.append(run_strength(rig, a.p, inertial, a.strain or st["axial_strain_max"],
@@ -76,7 +81,7 @@ def main(argv=None):
         phi = [r.phi_peak_deg for r in res]
         stray = max(float(np.max(np.abs(r.confining[r.axial_strain >= r.seating_strain] / (a.p * 1e3) - 1.0)))
                     for r in res)
-        print(f"| {inertial:g} | {mu_r:g} | {mu:g} | {', '.join(f'{v:.1f}' for v in phi)} | {np.mean(phi):.1f} | "
+        print(f"| {control} | {inertial:g} | {mu_r:g} | {mu:g} | {', '.join(f'{v:.1f}' for v in phi)} | {np.mean(phi):.1f} | "
               f"{np.mean([r.q_peak for r in res]) / 1e3:.0f} | "
               f"{np.mean([r.dilatancy_angle_deg for r in res]):.1f} | {stray:.3f} | "
               f"{(time.perf_counter() - t) / len(res):.0f} |", flush=True)

@@ -249,7 +249,7 @@ def test_real_time_mode_follows_the_frequency(specimen, control, within):
     rig = BiaxialRig.load(specimen)
     p = rig.params
     p.mode, p.frequency_Hz, p.realtime_added_inertia_max = "real_time", 20.0, 0.01
-    p.axial_control = control
+    p.load_control = control
     run = BiaxialRun(rig, cycles=4).run()
     assert 0.005 < rig.sim.added_inertia() < 0.015
     assert rig.sim.dt > 1.05 * rig.sim.scaled_timestep(0.0)      # the automatic dt

@@ -31,13 +31,14 @@ Controllers:
           lo + (hi - lo) (1 - cos(2 pi f (t - t0))) / 2 in simulated time t, from lo at t0,
           plus a feed-forward -C d(target)/dt with the actuator's compliance C [m per
           reading unit] (0: none; the rig sets it from what it measures); events at its
-          half periods (PEAK at the maxima, TROUGH at the minima). With an ``areal_mass``
-          mu > 0 it drives a platen instead: the actuator is a body of mu [mass per reading
-          unit of force: kg/m^2 for a stress] under the target as an applied load, its
-          velocity integrated every step from a = (reading - target) / mu (towards +axis
-          for a positive gain), so the reading (the contacts' load on it) follows the
-          target up to the platen's inertia mu a, whatever the specimen's compliance: a
-          stress boundary, as the load of a force-controlled actuator on the top cap.
+          half periods (PEAK at the maxima, TROUGH at the minima).
+A SERVO or SINE with an ``areal_mass`` mu > 0 drives a body instead (a platen, a side
+wall): its actuator is a body of mu [mass per reading unit of force: kg/m^2 for a stress]
+under the target as an applied load, its velocity integrated every step from
+a = (reading - target) / mu (towards +axis for a positive gain), so the reading (the
+contacts' load on it) follows the target up to the body's inertia mu a, whatever the
+specimen's compliance: a stress boundary, as a force-controlled actuator's load on a cap or
+a cell pressure on a membrane. Its gain's sign alone counts; its window events as before.
 
 All arrays live in one named container (``ControlArrays``); the ``Control`` class builds it
 and saves/restores it (rigs keep it in their checkpoints).
@@ -66,7 +67,7 @@ TARGET, GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, WINDOW_STEPS, TOUCH = range(7)
 LO, HI, VMIN, BRAKE = 0, 1, 2, 4          # CYCLIC: VMAX = 3 as above
 SINE_LO, SINE_HI, FREQUENCY = 5, 6, 7     # SINE: GAIN ... INTEGRAL_STEPS as SERVO
 COMPLIANCE = 0                            # SINE: the feed-forward's (TARGET's slot)
-AREAL_MASS = 8                            # SINE: its platen's (0: the PI servo drives)
+AREAL_MASS = 8                            # SERVO, SINE: a driven body's (0: the PI servo)
 INTEGRAL, TOUCHED, APPROACH_STEPS, WINDOW_DONE = range(4)
 HALF_PERIODS, T0, NOW = 1, 2, 3           # SINE state (INTEGRAL = 0 as SERVO)
 DIRECTION = 0
@@ -76,7 +77,8 @@ assert VMAX == 3
 _STATE = {"integral": INTEGRAL, "touched": TOUCHED, "approach_steps": APPROACH_STEPS,
           "window_done": WINDOW_DONE, "direction": DIRECTION}
 _SERVO_PAR = {"target": TARGET, "gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": VMAX,
-              "integral_steps": INTEGRAL_STEPS, "window_steps": WINDOW_STEPS, "touch": TOUCH}
+              "integral_steps": INTEGRAL_STEPS, "window_steps": WINDOW_STEPS, "touch": TOUCH,
+              "areal_mass": AREAL_MASS}
 _CYCLIC_PAR = {"lo": LO, "hi": HI, "v_min": VMIN, "v_max": VMAX, "brake": BRAKE}
 _SINE_PAR = {"gain": GAIN, "gain_unit": GAIN_UNIT, "v_max": VMAX,
              "integral_steps": INTEGRAL_STEPS, "lo": SINE_LO, "hi": SINE_HI,
@@ -199,21 +201,22 @@ def controller_velocity(c, k):
 
 
 @njit(**NO_NRT)
-def drives_platen(c, k):
-    return c.ctl[k, 0] == SINE and c.cpar[k, AREAL_MASS] > 0.0
+def drives_body(c, k):
+    return c.ctl[k, 0] != CYCLIC and c.cpar[k, AREAL_MASS] > 0.0
 
 
 @njit(**NO_NRT)
-def drive_platens(prm, clumps, walls, c):
-    """Every step: the velocity of each driven platen (a SINE with an areal mass) for the
-    next step, from the load on it now (symplectic Euler, as the balls: stable while its
-    contacts' stiffness over its mass stays below (2 / dt)^2)."""
+def drive_bodies(prm, clumps, walls, c):
+    """Every step: the velocity of each driven body (a SERVO or SINE with an areal mass)
+    for the next step, from the load on it now (symplectic Euler, as the balls: stable
+    while its contacts' stiffness over its mass stays below (2 / dt)^2)."""
     for k in range(c.ctl.shape[0]):
-        if c.ctl[k, 3] == 0 or not drives_platen(c, k):
+        if c.ctl[k, 3] == 0 or not drives_body(c, k):
             continue
         par = c.cpar[k]
+        target = sine_target_at(par, c.cst[k], prm[P.TIME]) if c.ctl[k, 0] == SINE else par[TARGET]
         load = sensor_reading(prm, clumps, walls, c, c.ctl[k, 1])
-        accel = math.copysign(1.0, par[GAIN]) * (load - sine_target_at(par, c.cst[k], prm[P.TIME])) / par[AREAL_MASS]
+        accel = math.copysign(1.0, par[GAIN]) * (load - target) / par[AREAL_MASS]
         a, b, ax = c.actuators[c.ctl[k, 2], 1], c.actuators[c.ctl[k, 2], 2], c.actuators[c.ctl[k, 2], 3]
         v = walls.vel[c.members[a], ax] + prm[P.DT] * accel
         for m in range(a, b):
@@ -222,11 +225,11 @@ def drive_platens(prm, clumps, walls, c):
 
 @njit(**NO_NRT)
 def actuate(clumps, walls, c):
-    """Impose every active controller's velocity on its actuator (a driven platen's is
-    its own: drive_platens)."""
+    """Impose every active controller's velocity on its actuator (a driven body's is its
+    own: drive_bodies)."""
     c.cfg[PENDING] = 0
     for k in range(c.ctl.shape[0]):
-        if c.ctl[k, 3] == 0 or drives_platen(c, k):
+        if c.ctl[k, 3] == 0 or drives_body(c, k):
             continue
         v = controller_velocity(c, k)
         kind, a, b, ax = (c.actuators[c.ctl[k, 2], 0], c.actuators[c.ctl[k, 2], 1],
@@ -245,7 +248,7 @@ def actuate(clumps, walls, c):
 def control_step(prm, step, clumps, walls, c):
     """Once every ``every`` steps, after the step: read, sample, update; impose the
     velocities unless an event asks Python first. Returns True on an event."""
-    drive_platens(prm, clumps, walls, c)
+    drive_bodies(prm, clumps, walls, c)
     c.cfg[COUNT] += 1
     if c.cfg[COUNT] < c.cfg[EVERY]:
         return False

@@ -11,12 +11,12 @@ specimen bulges as a real one does (the segments' heights follow the platens: ea
 1. deposition in a tall box of the specimen's width; balls above the specimen height cut;
 2. isotropic consolidation: three stress servos (left, right, top) hold p until the
    window means of all three are within ``consolidation_tolerance`` of p;
-3. cyclic loading: the side servos keep p; the axial stress sigma_1 = p + q runs between
-   p + q_min and p + q_max as a sinusoid in simulated time, applied as a load to the top
-   platen, a body of platen_mass_ratio x the specimen's mass (``axial_control``
-   applied_force: a stress boundary), or followed by a stress servo moving the platen
-   with a feed-forward from the compliance it measures per branch (servo); bounds
-   adapted cycle by cycle — real time: at the test's frequency f (a
+3. cyclic loading: the sides keep p; the axial stress sigma_1 = p + q runs between
+   p + q_min and p + q_max as a sinusoid in simulated time. ``load_control``
+   applied_force: both are loads on bodies (stress boundaries), the top platen of
+   platen_mass_ratio x the specimen's mass, the sides of its mass per area; servo: stress
+   servos move the walls, the platen's with a feed-forward from the compliance it
+   measures per branch. Bounds adapted cycle by cycle — real time: at the test's frequency f (a
    cycle lasts 1/f), true masses but for realtime_added_inertia_max of density scaling;
    quasi-static: at the largest f the inertial-number and stress-wave bounds allow
    (``inertial``), with density scaling (loading_dt_factor), its first loading the
@@ -35,13 +35,13 @@ The behaviours per cycle are ``ballaststudy.metrics.biaxial.compute_biaxial_cycl
 """
 from .assembly import assemble_biaxial, build_specimen, membrane_groups, wall_friction
 from .loading import (AXIAL, CYCLE_FIELDS, HEIGHT, LEFT, RIGHT, X_LEFT, X_RIGHT, BiaxialRun,
-                      BiaxialState, ControllerIds, biaxial_control, segment_scales)
+                      BiaxialState, ControllerIds, biload_control, segment_scales)
 from .output import CHANNEL_UNITS, write_biaxial_outputs
 from .params import KPA, BiaxialParams
 from .specimen import MEMBRANE, PLATEN, BiaxialLayout, BiaxialRig, place_membrane
 
 __all__ = ["assemble_biaxial", "build_specimen", "membrane_groups", "wall_friction", "AXIAL",
            "CYCLE_FIELDS", "HEIGHT", "LEFT", "RIGHT", "X_LEFT", "X_RIGHT", "BiaxialRun",
-           "BiaxialState", "ControllerIds", "biaxial_control", "segment_scales",
+           "BiaxialState", "ControllerIds", "biload_control", "segment_scales",
            "CHANNEL_UNITS", "write_biaxial_outputs", "KPA", "BiaxialParams", "MEMBRANE",
            "PLATEN", "BiaxialLayout", "BiaxialRig", "place_membrane"]

@@ -35,7 +35,7 @@ def segment_scales(n_groups, seg_len, t):
     return [(-1.0 if k < n_groups // 2 else 1.0) / (seg_len * t) for k in range(n_groups)]
 
 
-def biaxial_control(rig):
+def biload_control(rig):
     """Stress sensors of the moving walls (each side as a whole, and each membrane segment),
     their positions, and the controllers: the side servos (on while cycling), the top
     platen's consolidation servo, the profile and the sinusoid. Returns (Control, ids)."""
@@ -130,14 +130,14 @@ class BiaxialRun(CyclicRun):
     def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
                  resumed=False):
         p = rig.params
-        control, self.ids = biaxial_control(rig)
+        control, self.ids = biload_control(rig)
         super().__init__(rig, cycles, control, checkpoint,
                          checkpoint_every or p.checkpoint_every, metrics, p.max_cycle_steps)
         self._metrics_setup()
         if p.mode not in ("quasi_static", "real_time"):
             raise ValueError(f"loading mode {p.mode!r}: quasi_static or real_time")
-        if p.axial_control not in ("applied_force", "servo"):
-            raise ValueError(f"axial_control {p.axial_control!r}: applied_force or servo")
+        if p.load_control not in ("applied_force", "servo"):
+            raise ValueError(f"load_control {p.load_control!r}: applied_force or servo")
         if p.loading_dt_factor > 1.0 and not resumed:   # at rest while consolidating
             rig.sim.set_density_scaling(p.loading_dt_factor * rig.sim.dt)
 
@@ -156,15 +156,26 @@ class BiaxialRun(CyclicRun):
         c.set_scale(AXIAL, 1.0 / (w * t))
         c.set_scale(LEFT, -1.0 / (h * t))
         c.set_scale(RIGHT, 1.0 / (h * t))
-        if c.get(self.ids.sine, "areal_mass") > 0.0:
-            c.set(self.ids.sine, areal_mass=self.platen_mass() / (w * t))
+        mu = self.rig.params.platen_mass_ratio * self.specimen_mass() / (w * t)
+        for k in (self.ids.sine, *self.ids.sides):
+            if c.get(k, "areal_mass") > 0.0:
+                c.set(k, areal_mass=mu)
 
-    def platen_mass(self):
-        """The driven top platen's mass [kg]: platen_mass_ratio x the specimen's balls'
-        inertial mass (density scaling's included: the platen's step stays as stable as
-        the balls', its stiffness over its mass below that of the balls it touches)."""
+    def specimen_mass(self):
+        """The balls' inertial mass [kg] (density scaling's included: driven boundaries
+        scale with it, so their step stays as stable as the balls', their stiffness over
+        their mass below that of the balls they touch)."""
         b = self.rig.sim.balls
-        return self.rig.params.platen_mass_ratio * float((1.0 / b.minv[b.alive]).sum())
+        return float((1.0 / b.minv[b.alive]).sum())
+
+    def _drive(self, controllers):
+        """load_control applied_force: these controllers drive their walls as bodies of
+        the areal mass of a top platen of platen_mass_ratio x the specimen's mass
+        (_rescale sets it), their targets applied as loads."""
+        if self.rig.params.load_control == "applied_force":
+            for k in controllers:
+                self.control.set(k, areal_mass=1.0)
+            self._rescale()
 
     # --------------------------------------------------------------- events
     def advance(self, max_steps=None):
@@ -214,6 +225,7 @@ class BiaxialRun(CyclicRun):
             s.height0, s.width0 = self.rig.height(), self.rig.width()
             for k in self.ids.sides:        # keep p; no more windows
                 c.set(k, window_steps=np.inf)
+            self._drive(self.ids.sides)
             c.set(self.ids.top, active=False)
             s.half_sample0 = len(self.samples["step"]) - 1
             self._start_first_loading()
@@ -247,9 +259,7 @@ class BiaxialRun(CyclicRun):
         c.set(self.ids.profile, active=False)
         c.set(self.ids.sine, active=True, half_periods=0, integral=0.0, compliance=0.0,
               t0=self.rig.sim.time)
-        if self.rig.params.axial_control == "applied_force":
-            c.set(self.ids.sine, areal_mass=1.0)      # on: _rescale sets its value
-            self._rescale()
+        self._drive([self.ids.sine])
 
     def _at_rest(self):
         """Whether the axial strain rate since the last window is below

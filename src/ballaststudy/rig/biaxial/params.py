@@ -36,9 +36,11 @@ class BiaxialParams(DepositionParams):
     sine_servo_time_waves: float = 2.0      # the sinusoid's servo: time constant C / gain in t_w
     sine_velocity_min_m_s: float = 0.05     # its speed limit: this, or 2 pi f C dq if more
     sine_feed_forward: bool = True          # the servo plus -C dq/dt, C measured per branch
-    axial_control: str = "applied_force"    # the sinusoid: "applied_force" loads a platen
-                                            # of ... ("servo": a PI servo moves it)
+    load_control: str = "applied_force"     # from the first loading on, the platen's
+                                            # sinusoid and the sides' p: loads on bodies,
+                                            # the platen of ... ("servo": PI servos)
     platen_mass_ratio: float = 0.01         # ... this mass / the specimen's balls' mass
+                                            # (the sides: the platen's mass per area)
     quasi_static_inertial_number: float = 1.0e-3   # quasi-static f: the inertial number ...
     quasi_static_lag: float = 0.1                   # ... and the stress's lag / (q_max - q_min)
     first_loading_inertial_number: float = 1.5e-5  # cycle 0, the profile (both modes): the

@@ -53,9 +53,12 @@ def run_strength(rig, p_kPa, inertial_number, axial_strain_max=0.10, side_gain=1
                  side_integral_steps=500, progress=None):
     """Consolidate ``rig`` (assembled, not loaded) to p, then compress at the inertial
     number's strain rate until axial_strain_max or past the peak by the rig's
-    softening_strain, the side servos at ``side_gain`` [m/s per kPa], integral time
-    ``side_integral_steps`` and up to twice the platen's speed: a dilating specimen widens
-    at up to about half of it, and they must follow or sigma_3 swings. Measured at p = 30
+    softening_strain, the sides loaded with p (load_control applied_force: bodies of the
+    rig's boundary mass per area; sigma_3 stays within 0.1 % of p where the servos let it
+    stray 19 %, bench/strength_table.py) or (servo) the side servos at ``side_gain`` [m/s
+    per kPa], integral time ``side_integral_steps`` and up to twice the platen's speed: a
+    dilating specimen widens at up to about half of it, and they must follow or sigma_3
+    swings. Measured at p = 30
     kPa: with the cyclic servos' 2e-4 m/s/kPa, 0.01 m/s, 5000 steps sigma_3 swung 22-78 kPa
     (0.15 x 0.30 m box_test specimen); 1e-3 and 5000 steps gave 28-33 kPa there and 25-39
     kPa on the tests' synthetic specimen, 1e-3 and 500 steps 29-32 kPa on the latter (5e-3:
