@@ -276,3 +276,23 @@ def test_driven_platen_follows_the_applied_load(gain, within):
     if within:
         overlap = R - sim.walls.seg[right[0], 0]
         assert overlap == pytest.approx(lo / KN, rel=0.01)
+
+
+def test_only_walls_are_driven_and_old_checkpoints_load():
+    """A held clump cannot be a driven body (it would write wall velocities); control
+    arrays saved before the areal mass existed (8 parameter columns) load as undriven."""
+    sim, _, plate = plate_on_ball()
+    c = Control(every=10)
+    f = c.clump_reaction(plate, axis=1)
+    with pytest.raises(ValueError, match="wall segments"):
+        c.sine(f, c.held_clump(plate, axis=1), lo=1.0, hi=2.0, frequency=1.0, gain=1.0,
+               v_max=1.0, integral_steps=0, areal_mass=1.0)
+    k = c.servo(f, c.held_clump(plate, axis=1), target=50.0, gain=2e-4, v_max=0.05,
+                integral_steps=500, window_steps=700)
+    c.build()
+    with pytest.raises(ValueError, match="wall segments"):
+        c.set(k, areal_mass=1.0)
+    old = c.to_dict()
+    old["control_cpar"] = old["control_cpar"][:, :8]
+    restored = Control(every=10).load(old)
+    assert np.array_equal(restored.arrays.cpar, c.arrays.cpar)

@@ -33,7 +33,7 @@ Controllers:
           reading unit] (0: none; the rig sets it from what it measures); events at its
           half periods (PEAK at the maxima, TROUGH at the minima).
 A SERVO or SINE with an ``areal_mass`` mu > 0 drives a body instead (a platen, a side
-wall): its actuator is a body of mu [mass per reading unit of force: kg/m^2 for a stress]
+wall): its actuator, a set of wall segments, is a body of mu [mass per reading unit of force: kg/m^2 for a stress]
 under the target as an applied load, its velocity integrated every step from
 a = (reading - target) / mu (towards +axis for a positive gain), so the reading (the
 contacts' load on it) follows the target up to the body's inertia mu a, whatever the
@@ -202,7 +202,8 @@ def controller_velocity(c, k):
 
 @njit(**NO_NRT)
 def drives_body(c, k):
-    return c.ctl[k, 0] != CYCLIC and c.cpar[k, AREAL_MASS] > 0.0
+    return (c.ctl[k, 0] != CYCLIC and c.cpar[k, AREAL_MASS] > 0.0
+            and c.actuators[c.ctl[k, 2], 0] == WALLS)
 
 
 @njit(**NO_NRT)
@@ -359,6 +360,8 @@ class Control:
         """Real-time sinusoid from lo to hi at ``frequency`` [Hz] (t0: ``set(k, t0=...)``
         when it starts; the servo part as ``servo``; areal_mass > 0: it drives a platen of
         that mass per reading unit of force instead, the sign of ``gain`` its direction)."""
+        if areal_mass > 0 and self._actuators[actuator][0] != WALLS:
+            raise ValueError("only wall segments are driven as bodies")
         par = np.zeros(NPAR)
         par[[GAIN, GAIN_UNIT, VMAX, INTEGRAL_STEPS, SINE_LO, SINE_HI, FREQUENCY, AREAL_MASS]] = (
             gain, gain_unit, v_max, integral_steps, lo, hi, frequency, areal_mass)
@@ -442,6 +445,8 @@ class Control:
         """Change controller k's parameters (target=..., ...) or state (integral=...,
         direction=...) or switch it (active=True/False)."""
         for name, v in values.items():
+            if name == "areal_mass" and v > 0 and self.arrays.actuators[self.arrays.ctl[k, 2], 0] != WALLS:
+                raise ValueError(f"controller {k}: only wall segments are driven as bodies")
             if name == "active":
                 self.arrays.ctl[k, 3] = 1 if v else 0
             else:

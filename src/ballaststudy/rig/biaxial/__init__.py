@@ -16,7 +16,7 @@ specimen bulges as a real one does (the segments' heights follow the platens: ea
    applied_force: both are loads on bodies (stress boundaries), the top platen of
    platen_mass_ratio x the specimen's mass, the sides of its mass per area; servo: stress
    servos move the walls, the platen's with a feed-forward from the compliance it
-   measures per branch. Bounds adapted cycle by cycle — real time: at the test's frequency f (a
+   measures per branch and bounds adapted cycle by cycle. Real time: at the test's frequency f (a
    cycle lasts 1/f), true masses but for realtime_added_inertia_max of density scaling;
    quasi-static: at the largest f the inertial-number and stress-wave bounds allow
    (``inertial``), with density scaling (loading_dt_factor), its first loading the

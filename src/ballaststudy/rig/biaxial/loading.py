@@ -301,7 +301,7 @@ class BiaxialRun(CyclicRun):
         differ: a loading one deforms plastically too; a branch whose stress moved less than
         a tenth of the range, or none, keeps the last C; the first unloading's C stands for
         the reloadings' until one is measured: the virgin loading's is plastic) and, with
-        sine_feed_forward, for the next branch the sinusoid's feed-forward -C d(target)/dt
+        sine_feed_forward under the servo, for the next branch the sinusoid's feed-forward -C d(target)/dt
         with the C of its kind, so the servo only corrects what C does not foresee, and the
         bound the branch before missed (its extreme comes late, in this branch: the
         commanded bound moves by the miss; not cycle 0's, the profile's). Quasi-static: the
@@ -324,8 +324,8 @@ class BiaxialRun(CyclicRun):
         if s.phase == "loading" and not loaded:     # the first unloading: a reloading is not
             s.compliance[0] = s.compliance[1]       # the virgin loading (plastic: 10 x softer)
         following = s.compliance[loaded] or s.compliance[1 - loaded]
-        if p.sine_feed_forward:
-            if s.cycle >= 1 + loaded:       # the branch before is not one of cycle 0
+        if p.sine_feed_forward and p.load_control == "servo":   # an applied load misses by
+            if s.cycle >= 1 + loaded:       # noise alone: adapted to, the 60 Hz misses grew       # the branch before is not one of cycle 0
                 self._adapt_bound(s.prev_half_sample0, k1, not loaded)
             self.control.set(self.ids.sine, compliance=following)
         if p.mode == "quasi_static" and max(s.compliance) > 0.0:

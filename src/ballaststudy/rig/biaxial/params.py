@@ -35,7 +35,8 @@ class BiaxialParams(DepositionParams):
     frequency_Hz: float = 20.0
     sine_servo_time_waves: float = 2.0      # the sinusoid's servo: time constant C / gain in t_w
     sine_velocity_min_m_s: float = 0.05     # its speed limit: this, or 2 pi f C dq if more
-    sine_feed_forward: bool = True          # the servo plus -C dq/dt, C measured per branch
+    sine_feed_forward: bool = True          # servo: plus -C dq/dt, C measured per branch,
+                                            # and bounds adapted cycle by cycle
     load_control: str = "applied_force"     # from the first loading on, the platen's
                                             # sinusoid and the sides' p: loads on bodies,
                                             # the platen of ... ("servo": PI servos)
