@@ -140,6 +140,19 @@ def pressed_ball(d0):
     return sim, right
 
 
+def period_error(sim, c, sensor, lo, hi, f, steps=20000):
+    """Run ``steps`` (one period of f at dt 1e-5); the sensor's largest distance from the
+    sinusoid lo..hi, as a fraction of hi - lo."""
+    rows = []
+    while sim.step < steps:
+        sim.run(steps - sim.step, control=c)
+        rows.append(c.drain())
+        c.clear_event()
+    rows = np.concatenate(rows)
+    target = lo + 0.5 * (hi - lo) * (1.0 - np.cos(2.0 * np.pi * f * rows[:, 0] * sim.dt))
+    return np.abs(rows[:, 1 + sensor] - target).max() / (hi - lo)
+
+
 @pytest.mark.parametrize("factor, within", [(1.0, True), (0.0, False), (2.0, False)])
 def test_sine_feed_forward_follows_the_target(factor, within):
     """The right wall under a SINE controller with a negligible servo gain: its feed-forward
@@ -155,15 +168,7 @@ def test_sine_feed_forward_follows_the_target(factor, within):
                v_max=1.0, integral_steps=0)
     c.build()
     c.set(k, t0=0.0, compliance=factor * 2.0 / KN)
-    rows = []
-    while sim.step < 20000:                  # one period
-        sim.run(20000 - sim.step, control=c)
-        rows.append(c.drain())
-        c.clear_event()
-    rows = np.concatenate(rows)
-    t = rows[:, 0] * sim.dt
-    target = lo + 0.5 * (hi - lo) * (1.0 - np.cos(2.0 * np.pi * f * t))
-    error = np.abs(rows[:, 1 + sensor] - target).max() / (hi - lo)
+    error = period_error(sim, c, sensor, lo, hi, f)
     assert (error < 0.02) == within, error
 
 
@@ -263,15 +268,7 @@ def test_driven_platen_follows_the_applied_load(gain, within):
     lo, hi, f, mass = 50.0, 150.0, 5.0, 0.05
     sim, right = platen_on_fixed_ball(gap=-lo / KN)
     c, sensor = driven(sim, right, lo, hi, f, mass, gain=gain, every=10)
-    rows = []
-    while sim.step < 20000:                  # one period
-        sim.run(20000 - sim.step, control=c)
-        rows.append(c.drain())
-        c.clear_event()
-    rows = np.concatenate(rows)
-    t = rows[:, 0] * sim.dt
-    target = lo + 0.5 * (hi - lo) * (1.0 - np.cos(2.0 * np.pi * f * t))
-    error = np.abs(rows[:, 1 + sensor] - target).max() / (hi - lo)
+    error = period_error(sim, c, sensor, lo, hi, f)
     assert (error < 0.005) == within, error
     if within:
         overlap = R - sim.walls.seg[right[0], 0]
