@@ -9,11 +9,13 @@ volumetric strain, and at the peak q_peak, the friction angle phi_peak
 The rate is the strain rate of inertial number ``inertial_number`` (config
 strength.inertial_number, 1.5e-5; inertial.py), with the quasi-static mode's density scaling
 (loading_dt_factor: inertia added to the smallest balls only). phi_peak depends on it: on
-three 0.15 x 0.30 m box_test specimens (bench/strength_table.py, seeds 1-3, mu 0.7) the
-mean phi_peak at I = 1e-3 / 1e-4 / 1.5e-5 was 56.8 / 47.8 / 48.3 deg at p = 30 kPa
-(converged below 1e-4: each seed within 1 deg) and 53.2 / 44.1 / 40.4 at p = 60 kPa (not
-converged: 2.4-5.9 deg per seed between the last two). 1.5e-5, the first loading's bound
-(first_loading_inertial_number), is the slowest rate measured. q is read as its mean over peak.WINDOW_STRAIN of axial strain, the measure on which the
+three 0.15 x 0.30 m box_test specimens (bench/strength_table.py, seeds 1-3, mu 0.7, p
+applied to the sides) the mean phi_peak at I = 1e-3 / 1e-4 / 1.5e-5 was 55.5 / 49.8 /
+46.5 deg at p = 30 kPa and 49.8 / 43.4 / 42.0 at p = 60 kPa, not converged: between the
+last two rates seeds moved -6.1, -6.3, +2.5 deg at 30 kPa and +1.8, -6.5, +0.6 at 60
+(with side servos, which let sigma_3 stray up to 19 %, 30 kPa looked converged). 1.5e-5,
+the first loading's bound (first_loading_inertial_number), is the slowest rate measured.
+q is read as its mean over peak.WINDOW_STRAIN of axial strain, the measure on which the
 test also stops past its peak (BiaxialRun.check_stalled)."""
 from dataclasses import asdict, dataclass
 
