@@ -8,9 +8,9 @@ largest and smallest axial stress of each cycle against p + q_max and p + q_min.
 
 One specimen (box_test's library at the config's resolution, bench/case_benchmark.py, or
 --library) assembled once; each frequency consolidates and cycles a copy of it in
-real-time mode, under each axial control asked for (default: the config's). Prints per
-cycle sigma_1 max / (p + q_max) and min / (p + q_min), and the worst error over the cycles (the issue's target: within 2 % from the first cycle). Never a
-test."""
+real-time mode, under each load control asked for (default: the config's). Prints per
+cycle sigma_1 max / (p + q_max) and min / (p + q_min), and the worst error over the
+cycles (the issue's target: within 2 % from the first cycle). Never a test."""
 import argparse
 import os
 import sys

@@ -33,12 +33,13 @@ Controllers:
           reading unit] (0: none; the rig sets it from what it measures); events at its
           half periods (PEAK at the maxima, TROUGH at the minima).
 A SERVO or SINE with an ``areal_mass`` mu > 0 drives a body instead (a platen, a side
-wall): its actuator, a set of wall segments, is a body of mu [mass per reading unit of force: kg/m^2 for a stress]
-under the target as an applied load, its velocity integrated every step from
-a = (reading - target) / mu (towards +axis for a positive gain), so the reading (the
-contacts' load on it) follows the target up to the body's inertia mu a, whatever the
-specimen's compliance: a stress boundary, as a force-controlled actuator's load on a cap or
-a cell pressure on a membrane. Its gain's sign alone counts; its window events as before.
+wall): its actuator, a set of wall segments, is a body of mu [mass per reading unit of
+force: kg/m^2 for a stress] under the target as an applied load, its velocity integrated
+every step from a = (reading - target) / mu (towards +axis for a positive gain), so the
+reading (the contacts' load on it) follows the target up to the body's inertia mu a,
+whatever the specimen's compliance: a stress boundary, as a force-controlled actuator's
+load on a cap or a cell pressure on a membrane. Its gain's sign alone counts; its window
+events as before.
 
 All arrays live in one named container (``ControlArrays``); the ``Control`` class builds it
 and saves/restores it (rigs keep it in their checkpoints).
@@ -218,7 +219,8 @@ def drive_bodies(prm, clumps, walls, c):
         target = sine_target_at(par, c.cst[k], prm[P.TIME]) if c.ctl[k, 0] == SINE else par[TARGET]
         load = sensor_reading(prm, clumps, walls, c, c.ctl[k, 1])
         accel = math.copysign(1.0, par[GAIN]) * (load - target) / par[AREAL_MASS]
-        a, b, ax = c.actuators[c.ctl[k, 2], 1], c.actuators[c.ctl[k, 2], 2], c.actuators[c.ctl[k, 2], 3]
+        act = c.actuators[c.ctl[k, 2]]
+        a, b, ax = act[1], act[2], act[3]
         v = walls.vel[c.members[a], ax] + prm[P.DT] * accel
         for m in range(a, b):
             walls.vel[c.members[m], ax] = v

@@ -35,13 +35,13 @@ The behaviours per cycle are ``ballaststudy.metrics.biaxial.compute_biaxial_cycl
 """
 from .assembly import assemble_biaxial, build_specimen, membrane_groups, wall_friction
 from .loading import (AXIAL, CYCLE_FIELDS, HEIGHT, LEFT, RIGHT, X_LEFT, X_RIGHT, BiaxialRun,
-                      BiaxialState, ControllerIds, biload_control, segment_scales)
+                      BiaxialState, ControllerIds, biaxial_control, segment_scales)
 from .output import CHANNEL_UNITS, write_biaxial_outputs
 from .params import KPA, BiaxialParams
 from .specimen import MEMBRANE, PLATEN, BiaxialLayout, BiaxialRig, place_membrane
 
 __all__ = ["assemble_biaxial", "build_specimen", "membrane_groups", "wall_friction", "AXIAL",
            "CYCLE_FIELDS", "HEIGHT", "LEFT", "RIGHT", "X_LEFT", "X_RIGHT", "BiaxialRun",
-           "BiaxialState", "ControllerIds", "biload_control", "segment_scales",
+           "BiaxialState", "ControllerIds", "biaxial_control", "segment_scales",
            "CHANNEL_UNITS", "write_biaxial_outputs", "KPA", "BiaxialParams", "MEMBRANE",
            "PLATEN", "BiaxialLayout", "BiaxialRig", "place_membrane"]

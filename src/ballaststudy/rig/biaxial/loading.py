@@ -35,7 +35,7 @@ def segment_scales(n_groups, seg_len, t):
     return [(-1.0 if k < n_groups // 2 else 1.0) / (seg_len * t) for k in range(n_groups)]
 
 
-def biload_control(rig):
+def biaxial_control(rig):
     """Stress sensors of the moving walls (each side as a whole, and each membrane segment),
     their positions, and the controllers: the side servos (on while cycling), the top
     platen's consolidation servo, the profile and the sinusoid. Returns (Control, ids)."""
@@ -130,7 +130,7 @@ class BiaxialRun(CyclicRun):
     def __init__(self, rig, cycles, checkpoint=None, checkpoint_every=None, metrics=None,
                  resumed=False):
         p = rig.params
-        control, self.ids = biload_control(rig)
+        control, self.ids = biaxial_control(rig)
         super().__init__(rig, cycles, control, checkpoint,
                          checkpoint_every or p.checkpoint_every, metrics, p.max_cycle_steps)
         self._metrics_setup()
@@ -149,8 +149,8 @@ class BiaxialRun(CyclicRun):
         self.solid_cache = SolidCache(self.metrics_params.solid_reuse_tolerance)
 
     def _rescale(self):
-        """Stress sensors follow the specimen's current size (a driven platen's mass per
-        loaded area too)."""
+        """Stress sensors follow the specimen's current size (driven walls' mass per loaded
+        area too)."""
         c, t = self.control, self.rig.sim.thickness
         w, h = self.rig.width(), self.rig.height()
         c.set_scale(AXIAL, 1.0 / (w * t))
@@ -301,8 +301,8 @@ class BiaxialRun(CyclicRun):
         differ: a loading one deforms plastically too; a branch whose stress moved less than
         a tenth of the range, or none, keeps the last C; the first unloading's C stands for
         the reloadings' until one is measured: the virgin loading's is plastic) and, with
-        sine_feed_forward under the servo, for the next branch the sinusoid's feed-forward -C d(target)/dt
-        with the C of its kind, so the servo only corrects what C does not foresee, and the
+        sine_feed_forward under the servo, for the next branch the sinusoid's feed-forward
+        -C d(target)/dt with the C of its kind, so the servo only corrects what C does not foresee, and the
         bound the branch before missed (its extreme comes late, in this branch: the
         commanded bound moves by the miss; not cycle 0's, the profile's). Quasi-static: the
         frequency of the bounds for the larger C of the two kinds (they hold for the whole
@@ -324,8 +324,9 @@ class BiaxialRun(CyclicRun):
         if s.phase == "loading" and not loaded:     # the first unloading: a reloading is not
             s.compliance[0] = s.compliance[1]       # the virgin loading (plastic: 10 x softer)
         following = s.compliance[loaded] or s.compliance[1 - loaded]
-        if p.sine_feed_forward and p.load_control == "servo":   # an applied load misses by
-            if s.cycle >= 1 + loaded:       # noise alone: adapted to, the 60 Hz misses grew       # the branch before is not one of cycle 0
+        # (an applied load misses by noise alone: adapted to, its misses at 60 Hz grew)
+        if p.sine_feed_forward and p.load_control == "servo":
+            if s.cycle >= 1 + loaded:       # the branch before is not one of cycle 0
                 self._adapt_bound(s.prev_half_sample0, k1, not loaded)
             self.control.set(self.ids.sine, compliance=following)
         if p.mode == "quasi_static" and max(s.compliance) > 0.0:
