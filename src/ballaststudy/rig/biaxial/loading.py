@@ -302,9 +302,10 @@ class BiaxialRun(CyclicRun):
         a tenth of the range, or none, keeps the last C; the first unloading's C stands for
         the reloadings' until one is measured: the virgin loading's is plastic) and, with
         sine_feed_forward under the servo, for the next branch the sinusoid's feed-forward
-        -C d(target)/dt with the C of its kind, so the servo only corrects what C does not foresee, and the
-        bound the branch before missed (its extreme comes late, in this branch: the
-        commanded bound moves by the miss; not cycle 0's, the profile's). Quasi-static: the
+        -C d(target)/dt with the C of its kind, so the servo only corrects what C does not
+        foresee, and the bound the branch before missed (its extreme comes late, in this
+        branch: the commanded bound moves by the miss; not cycle 0's, the profile's).
+        Quasi-static: the
         frequency of the bounds for the larger C of the two kinds (they hold for the whole
         cycle; an unloading's C reads low while the specimen creeps down: with the coming
         branch's C the frequency rose fourfold over 15 cycles of creep on a small specimen,
