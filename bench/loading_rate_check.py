@@ -3,15 +3,17 @@ density scaling) change settlement and breakage beyond the case-to-case scatter?
 
     NUMBA_NUM_THREADS=1 python bench/loading_rate_check.py [--seeds 3] [--cycles 30]
         [--config config/config.yaml] [--library BPM.nc] [--jobs 2]
-        [--reference KEY=VALUE,...]
+        [--reference KEY=VALUE,...] [--candidate NAME:KEY=VALUE,... ...]
 
 Each seed is assembled once (box_test library, as bench/case_benchmark.py); the same
-assembled state is then loaded twice: with the conservative REFERENCE loading settings
-(slow speed profile over the whole range, no density scaling; override with --reference)
-and with the config's settings. Prints per seed and setting the final settlement, the
-displacement at peak, flat-joint elements broken, steps and seconds per cycle; then the
-mean difference candidate - reference of each behaviour next to the standard deviation
-across seeds of the reference (the case-to-case scatter). Never a test."""
+assembled state is then loaded with the conservative REFERENCE loading settings (slow
+speed profile over the whole range, no density scaling; override with --reference), with
+the config's settings and with each ``--candidate`` (the config's settings with rig
+overrides, e.g. ``dt4:loading_dt_factor=4``). Prints per seed and setting the final
+settlement, the displacement at peak, flat-joint elements broken, steps and seconds per
+cycle; then per setting the mean difference setting - reference of each behaviour next to
+the standard deviation across seeds of the reference (the case-to-case scatter). Never a
+test."""
 import argparse
 import os
 import sys
@@ -86,11 +88,16 @@ def main(argv=None):
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--library", help="a BPM.nc (default: build box_test's)")
     ap.add_argument("--reference", default=REFERENCE, help="rig overrides of the reference")
+    ap.add_argument("--candidate", nargs="*", default=[],
+                    help="further settings NAME:KEY=VALUE,... (config + overrides)")
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args(argv)
     ref = parse_overrides(a.reference)
     library = a.library or box_test_library(a.config)
     settings = {"reference": ref, "config": {}}
+    for c in a.candidate:
+        name, _, text = c.partition(":")
+        settings[name] = parse_overrides(text)
     with tempfile.TemporaryDirectory() as tmp, ProcessPoolExecutor(a.jobs) as pool:
         paths = [os.path.join(tmp, f"seed{s}.nc") for s in range(1, a.seeds + 1)]
         for s, t in zip(range(1, a.seeds + 1), pool.map(assemble_one, [library] * a.seeds,
@@ -105,12 +112,15 @@ def main(argv=None):
     print("setting   seed " + " ".join(f"{c:>20}" for c in cols))
     for (name, s), r in sorted(res.items()):
         print(f"{name:9} {s:4} " + " ".join(f"{r[c]:20.6g}" for c in cols))
-    for c in BEHAVIOURS + ("steps_per_cycle", "s_per_cycle"):
-        refv = np.array([res["reference", s][c] for s in range(1, a.seeds + 1)])
-        cand = np.array([res["config", s][c] for s in range(1, a.seeds + 1)])
-        print(f"{c}: reference mean {refv.mean():.6g}, config mean {cand.mean():.6g}, "
-              f"mean difference {np.mean(cand - refv):+.6g}, case-to-case std (reference) "
-              f"{refv.std(ddof=1) if a.seeds > 1 else float('nan'):.6g}")
+    seeds = range(1, a.seeds + 1)
+    for name in [n for n in settings if n != "reference"]:
+        for c in BEHAVIOURS + ("steps_per_cycle", "s_per_cycle"):
+            refv = np.array([res["reference", s][c] for s in seeds])
+            cand = np.array([res[name, s][c] for s in seeds])
+            print(f"{name} {c}: reference mean {refv.mean():.6g}, {name} mean "
+                  f"{cand.mean():.6g}, mean difference {np.mean(cand - refv):+.6g}, "
+                  f"case-to-case std (reference) "
+                  f"{refv.std(ddof=1) if a.seeds > 1 else float('nan'):.6g}")
     return 0
 
 
