@@ -34,6 +34,24 @@ def test_assembly(assembled, small_params):
     again = BoxRig.load(path)                                # the file restores the state
     assert np.array_equal(again.sim.balls.pos, rig.sim.balls.pos)
     assert again.layout.plate == lay.plate and again.layout.loading == lay.loading
+    assert again.layout.stages_at_limit == lay.stages_at_limit
+
+
+def test_stage_stopped_at_its_limit_is_recorded(small_library, small_params, assembled):
+    """A settle cut off at settle_max_steps (500 steps: the pile has just landed at
+    1000 m/s^2) is recorded with the speed it still had; the default stages are not."""
+    from dataclasses import replace
+
+    from ballaststudy.rig.assembly import assemble
+    from ballaststudy.rig.library import load_library
+    p = replace(small_params, settle_max_steps=500, settle_check_every=500)
+    rig = assemble(load_library(small_library), p, seed=7)
+    limits = rig.layout.stages_at_limit
+    assert [x.split(":")[0] for x in limits[:2]] == ["settle after the drop",
+                                                      "settle after tamping"]
+    speed = float(limits[0].split("speed ")[1].split(" m/s")[0])
+    assert speed >= p.settle_speed_m_s
+    assert not any(x.startswith("settle") for x in assembled[1].layout.stages_at_limit)
 
 
 def test_static_force_balance(assembled, small_params):

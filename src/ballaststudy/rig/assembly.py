@@ -79,7 +79,7 @@ def tamp(rig, progress=None):
     done += centripetal_pulses(rig, p.tamping_velocity_m_s, p.tamping_pulses, p.tamping_steps,
                                0.5 * p.width_m * p.tall_width_factor,
                                len(lay.stone_library_index), progress)
-    done += settle(rig, p, progress)
+    done += settle(rig, p, "settle after tamping", progress)
     b = sim.balls
     ids = rig.stone_balls()
     sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.depth_m])
@@ -134,7 +134,8 @@ def settle_plate(rig, progress=None):
     """Stage d: lower the held plate onto the stones (the tamped surface may lie below the
     cut at the ballast depth): fast to within ``plate_approach_gap_m`` of the highest
     stone ball under it (geometric gap), then at ``plate_settle_velocity_m_s`` until the
-    stones carry its weight. Returns the steps run."""
+    stones carry its weight (at most 10000 moves; a plate still not carried is recorded in
+    the layout's ``stages_at_limit``). Returns the steps run."""
     p, sim, lay = rig.params, rig.sim, rig.layout
     c = lay.plate
     b = sim.balls
@@ -162,6 +163,11 @@ def settle_plate(rig, progress=None):
         steps += n
         if progress is not None:
             progress(n)
+    else:
+        f, _ = sim.clump_force(c)
+        lay.stages_at_limit.append(
+            f"plate: the stones carry {f[1] - m * sim.gravity[1]:.3g} N of its "
+            f"{m * p.gravity_m_s2:.3g} N weight after {steps} steps (10000 moves)")
     sim.set_clump_velocity(c, vel=(0.0, 0.0), omega=0.0, held=True)
     return steps
 

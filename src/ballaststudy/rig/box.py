@@ -32,6 +32,8 @@ class RigLayout:
     database: str = ""
     library: str = ""
     stage_steps: dict = field(default_factory=dict)
+    # stages that stopped at their step limit, not at their criterion: one line each
+    stages_at_limit: list = field(default_factory=list)
 
 
 class BoxRig(Rig):

@@ -165,21 +165,26 @@ def ramp_gravity(specimen, g_from, g_to, steps, progress=None):
     return 20 * n
 
 
-def settle(specimen, params, progress=None):
+def settle(specimen, params, stage, progress=None):
     """Run until the mean speed of the stone balls is below ``settle_speed_m_s`` (checked
     every ``settle_check_every`` steps, at most ``settle_max_steps``): a pile that is in
     equilibrium at a high gravity stays so when the gravity is lowered, while one that
-    is still moving would take very long to settle at 9.81 m/s^2 (local damping)."""
+    is still moving would take very long to settle at 9.81 m/s^2 (local damping). A pile
+    still moving at the limit is recorded in the layout's ``stages_at_limit`` under
+    ``stage``. Returns the steps run."""
     p, sim = params, specimen.sim
-    steps = 0
-    while steps < p.settle_max_steps:
+    steps, speed = 0, np.inf
+    while steps < p.settle_max_steps and speed >= p.settle_speed_m_s:
         sim.run(p.settle_check_every)
         steps += p.settle_check_every
         if progress is not None:
             progress(p.settle_check_every)
         ids = specimen.stone_balls()
-        if np.mean(np.hypot(*sim.balls.vel[ids].T)) < p.settle_speed_m_s:
-            break
+        speed = float(np.mean(np.hypot(*sim.balls.vel[ids].T)))
+    if speed >= p.settle_speed_m_s:
+        specimen.layout.stages_at_limit.append(
+            f"{stage}: mean stone-ball speed {speed:.3g} m/s after {steps} steps "
+            f"(settle_max_steps; settled below settle_speed_m_s = {p.settle_speed_m_s:g})")
     return steps
 
 
@@ -220,7 +225,7 @@ def drop(specimen, params, n_stones, progress=None):
     Returns the steps run."""
     p, sim = params, specimen.sim
     sim.scale_bond_strength(p.drop_bond_factor)
-    state = {"fell": False, "steps": 0}
+    state = {"fell": False, "landed": False, "steps": 0}
 
     def watch(s):
         b = s.balls
@@ -233,10 +238,15 @@ def drop(specimen, params, n_stones, progress=None):
             progress(p.drop_check_every)
         if v < -1e-3:
             state["fell"] = True
-        return state["fell"] and v >= 0.0
+        state["landed"] = state["fell"] and v >= 0.0
+        return state["landed"]
 
     sim.run(p.drop_max_steps, callback=watch, every=p.drop_check_every)
-    return state["steps"] + settle(specimen, p, progress)
+    if not state["landed"]:
+        specimen.layout.stages_at_limit.append(
+            f"drop: the highest stone still falling after {state['steps']} steps "
+            f"(drop_max_steps)")
+    return state["steps"] + settle(specimen, p, "settle after the drop", progress)
 
 
 def centripetal_pulses(specimen, velocity, pulses, steps, half_width, n_stones,

@@ -68,6 +68,8 @@ def _case_assemble(args):
     recorder.finish()
     recorder.write_beside(args.out)
     lay = rig.layout
+    for line in lay.stages_at_limit:     # the run goes on; the log and the file say so
+        print(f"ballaststudy: warning: {args.out}: {line}", file=sys.stderr)
     if not args.quiet:
         print(f"wrote {args.out}: {len(lay.stone_library_index)} stones, "
               f"{rig.stone_balls().size} balls, {lay.bonds_installed} bonds, "
