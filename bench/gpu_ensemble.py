@@ -176,7 +176,7 @@ def main():
     print(f"cpu_engine_one_case_ball_steps_per_s={cpu_bsps:.3g} (n={a.n}, {a.cpu_steps} steps, "
           f"one thread)")
     print("not measured: 100 full-size biaxial specimens and the 160 thesis box cases "
-          "(the GPU batch holds no controllers or density scaling yet)")
+          "(the GPU batch holds no controllers yet)")
     print("| B | balls | steps | s | ball-steps/s | x CPU one case |")
     print("|---|---|---|---|---|---|")
     for nb, n, steps, t, bsps in rows:

@@ -117,6 +117,33 @@ def test_rolling_resistance_steps_like_the_cpu_engine():
             assert np.allclose(hc[k], hg[k], rtol=1e-6, atol=1e-15)
 
 
+def jointed_bed():
+    """Stones of four disks joined by flat joints (3 elements), a bed 0.5 m thick."""
+    b = bed(55, 2, n_elements=3, thickness=0.5)
+    b.balls.stone[:] = np.arange(len(b.balls)) // 4
+    assert b.install_flat_joints(FlatJointMaterial(E=1e7, sigma_c=2e5, c=2e5,
+                                                   gap_factor=1.5)) > 15
+    return b
+
+
+def test_density_scaling_steps_like_the_cpu_engine(beds):
+    """Density scaling at a fixed dt 10 x the beds' (integrate.critical_dt: inertial
+    masses raised at every rebuild so that dt is stable; a bed of flat-jointed stones
+    too): the batch raises the masses the CPU does, within round-off, and steps like it.
+    Most balls' masses are at least doubled (and a tenth of their moments), so a batch that
+    kept the real masses, or left out the walls' or the joints' springs, would fail here."""
+    cases = [copy.deepcopy(s) for s in beds[:2]] + [jointed_bed()]
+    for s in cases:
+        s.set_density_scaling(10.0 * s.dt)
+    cpu, gpu = on_both(cases, 12)
+    for c, g in zip(cpu, gpu):
+        assert np.mean(c.balls.minv < 0.5 / c.balls.mass) > 0.5
+        assert np.mean(c.balls.iinv < 0.5 / c.balls.inertia) > 0.1
+        assert np.allclose(g.balls.minv, c.balls.minv, rtol=1e-12, atol=0.0)
+        assert np.allclose(g.balls.iinv, c.balls.iinv, rtol=1e-12, atol=0.0)
+        assert_same_motion(c, g)
+
+
 def test_resume_from_a_checkpoint_equals_the_run_through(beds, tmp_path):
     """A case written back (to_simulations), checkpointed, loaded and batched again goes
     on bit for bit as the batch that ran straight through."""
@@ -173,11 +200,7 @@ def test_impacts_restitution():
 def test_flat_jointed_stones_step_like_the_cpu_engine():
     """Stones of four disks joined by flat joints (3 elements) in a settled bed 0.5 m
     thick: 12 steps as on the CPU within round-off, joint state included."""
-    b = bed(55, 2, n_elements=3, thickness=0.5)
-    b.balls.stone[:] = np.arange(len(b.balls)) // 4
-    assert b.install_flat_joints(FlatJointMaterial(E=1e7, sigma_c=2e5, c=2e5,
-                                                   gap_factor=1.5)) > 15
-    (c,), (g,) = on_both([b], 12)
+    (c,), (g,) = on_both([jointed_bed()], 12)
     assert_same_motion(c, g)
     for name in ("fn", "fs", "theta", "moment"):
         ref = getattr(c.bonds, name)

@@ -9,11 +9,12 @@ step, kernels.py); ``to_simulations(sims)`` writes the state back.
 What the batch holds today: balls (free or with held velocities, local damping, external
 loads), kinematic wall segments (constant velocity and spin), every contact law of
 ``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU), flat joints
-(failure, breakage log, interface removal; kernels.flat_joint), clumps (free or held).
+(failure, breakage log, interface removal; kernels.flat_joint), clumps (free or held),
+density scaling at a fixed dt (kernels.scale_masses, at every rebuild of a case).
 Checkpoints go through the CPU: ``to_simulations`` then ``Simulation.save_checkpoint``.
-Not yet: controllers, automatic dt and density scaling (a simulation that uses one of them is
-refused, ``BatchError``, never run differently), and the energy accounts (the batch books
-no dissipated work).
+Not yet: controllers and the automatic dt (a simulation that uses one of them is refused,
+``BatchError``, never run differently), and the energy accounts (the batch books no
+dissipated work).
 """
 import math
 import time
@@ -57,8 +58,8 @@ def cuda_available():
 def _check(sim, k):
     p = sim.prm
     why = []
-    if p[P.AUTO_DT] > 0.0 or p[P.DSCALE] > 0.0:
-        why.append("automatic dt or density scaling (give the Simulation a fixed dt)")
+    if p[P.AUTO_DT] > 0.0:
+        why.append("automatic dt (give the Simulation a fixed dt)")
     if p[P.DT] <= 0.0:
         why.append("no dt")
     if why:
@@ -105,11 +106,13 @@ class Batch:
         self.n_clumps = host["cpos"].shape[0]
         host["cell_n"] = np.zeros(grid_cells, np.int32)
         host["cell_ids"] = np.full((grid_cells, max_cell), -1, np.int32)
+        self.scaled = bool(np.any(host["cfg"][:, K.SCALE2] > 0.0))   # density scaling
         self.d = {k: cuda.to_device(v) for k, v in host.items()}
         self.k = K.kernels(law)
         self.timer = None
         self.prepared = {}            # kernel name -> _Prepared (or None: ordinary launches)
         self._build_lists()           # every case: the lists before the first forces
+        self._scale_masses()
         self._launch("unbin", self.n_balls, self.d["alive"], self.d["case"], self.d["need"],
                       self.d["cell_n"], self.d["bcell"])
 
@@ -162,6 +165,17 @@ class Batch:
                      d["bl"], d["bln"], d["bij"], d["bactive"], d["relist"], d["clump"],
                      d["err"])
 
+    def _scale_masses(self):
+        """Density scaling's inertial masses of the rebuilt cases (if any case scales)."""
+        if not self.scaled:
+            return
+        d = self.d
+        self._launch("scale_masses", self.n_balls, d["pos0"], d["rad"], d["mass"],
+                     d["inertia"], d["minv"], d["iinv"], d["mat"], d["alive"], d["case"],
+                     d["cfg"], d["coef"], d["nb"], d["nbn"], d["wl"], d["wln"], d["wmat"],
+                     d["bl"], d["bln"], d["bij"], d["bc"], d["bactive"], d["clump"],
+                     d["need"])
+
     def run(self, n_steps, check_every=1000):
         """Advance every case ``n_steps`` steps; the error flags are read every
         ``check_every`` steps and at the end (a failed case raises BatchError).
@@ -183,6 +197,7 @@ class Batch:
                          d["offset"], d["alive"], d["pos"], d["vel"], d["omega"], d["pos0"],
                          d["travel"], d["need"])
             self._build_lists()
+            self._scale_masses()
             self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
                          d["rad"], d["mass"], d["minv"], d["iinv"], d["fix"], d["damp"],
                          d["mat"], d["alive"], d["case"], d["fext"], d["force"], d["cfg"],
@@ -233,6 +248,8 @@ class Batch:
             s.balls.omega[:] = h["wend"][lo:hi]
             s.balls.force[:] = h["force"][lo:hi, :2]
             s.balls.moment[:] = h["force"][lo:hi, 2]
+            s.balls.minv[:] = h["minv"][lo:hi]        # density scaling's, if on
+            s.balls.iinv[:] = h["iinv"][lo:hi]
             w0, w1 = self._wall_offsets[b], self._wall_offsets[b + 1]
             for name, key in (("seg", "seg"), ("centre", "centre"), ("force", "wforce"),
                               ("moment", "wmoment")):
@@ -281,9 +298,10 @@ class Batch:
 
 
 # the device arrays to_simulations reads (each copied to the host once per call)
-_EXPORTED = ("pos", "vend", "wend", "force", "seg", "centre", "wforce", "wmoment", "cpos",
-             "cvel", "comega", "ctheta", "cforce", "cmoment", "bsc", "bstate", "bfn", "bfs",
-             "bactive", "logi", "logf", "logn", "nb", "nbn", "nh", "wl", "wln", "wh")
+_EXPORTED = ("pos", "vend", "wend", "force", "minv", "iinv", "seg", "centre", "wforce",
+             "wmoment", "cpos", "cvel", "comega", "ctheta", "cforce", "cmoment", "bsc",
+             "bstate", "bfn", "bfs", "bactive", "logi", "logf", "logn", "nb", "nbn", "nh",
+             "wl", "wln", "wh")
 
 
 def _lists_to_cpu(h, sim, lo, hi, w0):
@@ -325,8 +343,8 @@ def _pack(sims):
         return np.ascontiguousarray(np.concatenate([getattr(getattr(s, part), name)
                                                     for s in sims]))
 
-    h = {n: cat(n, "balls") for n in ("pos", "vel", "omega", "rad", "mass", "minv", "iinv",
-                                      "damp", "fext")}
+    h = {n: cat(n, "balls") for n in ("pos", "vel", "omega", "rad", "mass", "inertia",
+                                      "minv", "iinv", "damp", "fext")}
     h["fix"] = cat("fix", "balls").astype(np.int32)
     h["mat"] = cat("mat", "balls").astype(np.int32)
     h["alive"] = cat("alive", "balls").astype(np.uint8)
@@ -481,8 +499,9 @@ def _grids(sims):
         x0, y0, x1, y1 = (p[P.XMIN], p[P.YMIN], p[P.XMAX], p[P.YMAX])
         ncx = max(1, int(math.ceil((x1 - x0) / cs)))
         ncy = max(1, int(math.ceil((y1 - y0) / cs)))
+        scale2 = (p[P.DT] / p[P.DT_SAFETY]) ** 2 if p[P.DSCALE] > 0.0 else 0.0
         cfg[b] = (p[P.DT], p[P.GX], p[P.GY], p[P.THICK], p[P.SKIN], p[P.VMAX] ** 2,
-                  x0, y0, x1, y1, cs)
+                  x0, y0, x1, y1, cs, scale2)
         grid[b] = (ncx, ncy, start)
         start += ncx * ncy
         # the most disks of radius rmin whose centres fit one cell (a square lattice

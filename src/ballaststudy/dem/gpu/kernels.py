@@ -27,6 +27,8 @@ each costs microseconds of the host even when prepared (batch._Prepared):
   clumps_first (clump; only if there are clumps): half kick, drift, pebbles placed and
       checked like free balls
   bin, build (ball; flagged cases only): cell list, Verlet rows carrying history
+  scale_masses (ball; flagged cases with density scaling only): inertial masses raised
+      so that the case's dt is stable over the new rows (integrate.critical_dt)
   forces (ball): empty the cells of a rebuilt case, contacts, walls, flat joints, weight
       and load, local damping, half kick, guards (a pebble keeps its raw force)
   clumps_second (clump): pebble forces gathered, damping, half kick, pebble velocities
@@ -42,12 +44,13 @@ from ..bonds import (MODE_SHEAR, MODE_TENSION, broken_element, joint_frame, stri
 from ..clumps import pebble_motion
 from ..integrate import locally_damped
 from ..neighbours import seg_closest
-from ..submodels import NCOEF, WIDTH, contact_force, lf
+from ..submodels import NCOEF, WIDTH, contact_force, contact_stiffness, lf
 from ..walls import wall_contact_point
 
-# per-case scalar columns (``cfg``) and error bits (``err``)
-DT, GX, GY, THICK, SKIN, VMAX2, X0, Y0, X1, Y1, CELL = range(11)
-NCFG = 11
+# per-case scalar columns (``cfg``) and error bits (``err``); SCALE2: density scaling's
+# (dt / safety)^2, 0 when the case runs on its real masses
+DT, GX, GY, THICK, SKIN, VMAX2, X0, Y0, X1, Y1, CELL, SCALE2 = range(12)
+NCFG = 12
 # flat-joint constants (rows of ``bc``) and per-side state columns (``bsc``); the
 # breakage log: ``logi`` (step, bond, element, mode), ``logf`` (x, y, stress)
 RBAR, D0, GI, KN, KS, SIGC, COH, TANPHI, MU = range(9)
@@ -281,6 +284,61 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         wln[i] = n
         pos0[i, 0] = x
         pos0[i, 1] = y
+
+    @cuda.jit
+    def scale_masses(pos0, rad, mass, inertia, minv, iinv, mat, alive, case, cfg, coef, nb,
+                     nbn, wl, wln, wmat, bl, bln, bij, bc, bactive, clump, need):
+        """Density scaling as integrate.critical_dt does it at a rebuild: k_tr and k_rot
+        of the ball over its new rows (the full list: its own contacts), its walls and its
+        flat joints (a jointed pair within the skin counts its contact springs too, as
+        the list leaves it out), then 1/m = 1/max(m, k_tr s2), 1/I likewise; free balls
+        with springs only. Summed in another order than the CPU's half list: round-off."""
+        i = cuda.grid(1)
+        b = rebuilding(i, alive, case, need)
+        if b < 0 or cfg[b, SCALE2] == 0.0 or clump[i] >= 0:
+            return
+        t = cfg[b, THICK]
+        skin = cfg[b, SKIN]
+        ri = rad[i]
+        ktr = 0.0
+        krot = 0.0
+        for k in range(nbn[i]):
+            j = nb[k, i]
+            lo = min(i, j)
+            hi = max(i, j)
+            kn, ks, kr = contact_stiffness(LAW, row(coef, b, mat[lo], mat[hi]), rad[lo],
+                                           rad[hi], t)
+            ktr += kn + ks
+            krot += ks * ri * ri + kr
+        for k in range(wln[i]):
+            s = wl[k, i]
+            kn, ks, kr = contact_stiffness(LAW, row(coef, b, wmat[s], mat[i]), 0.0, ri, t)
+            ktr += kn + ks
+            krot += ks * ri * ri + kr
+        for k in range(bln[i]):
+            q = bl[k, i]
+            side = 0 if bij[0, q] == i else 1
+            if bactive[side, q] == 0:
+                continue
+            j = bij[1 - side, q]
+            dx = pos0[j, 0] - pos0[i, 0]
+            dy = pos0[j, 1] - pos0[i, 1]
+            cut = ri + rad[j] + skin
+            if dx * dx + dy * dy < cut * cut:    # (i is free: never i's own clump)
+                lo = min(i, j)
+                hi = max(i, j)
+                kn, ks, kr = contact_stiffness(LAW, row(coef, b, mat[lo], mat[hi]), rad[lo],
+                                               rad[hi], t)
+                ktr += kn + ks
+                krot += ks * ri * ri + kr
+            a = 2.0 * bc[RBAR, q] * t
+            ktr += (bc[KN, q] + bc[KS, q]) * a
+            krot += bc[KN, q] * t * (2.0 * bc[RBAR, q]) ** 3 / 12.0 + bc[KS, q] * a * ri * ri
+        if ktr == 0.0:
+            return
+        s2 = cfg[b, SCALE2]
+        minv[i] = 1.0 / max(mass[i], ktr * s2)
+        iinv[i] = 1.0 / max(inertia[i], krot * s2)
 
     @cuda.jit
     def unbin(alive, case, need, cell_n, bcell):
@@ -577,5 +635,5 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                 cuda.atomic.or_(err, b, ERR_GUARD)
 
     return dict(walls_step=walls_step, first_half=first_half, bin=bin_balls, build=build,
-                unbin=unbin, forces=forces, clumps_first=clumps_first,
+                scale_masses=scale_masses, unbin=unbin, forces=forces, clumps_first=clumps_first,
                 clumps_second=clumps_second)
