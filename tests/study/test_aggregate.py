@@ -84,6 +84,25 @@ def test_layout_coordinates_and_padding(tmp_path, inputs):
     assert (out.parent / "study.nc.prov.json").is_file()
 
 
+def test_assembly_stages_at_limit_are_counted_and_reported(tmp_path, synth, inputs):
+    """The rig layout a case's metrics file carries says how many assembly stages stopped
+    at their step limit; a file without the record (or no file) gives -1, and the
+    report's extent line counts the cases that had one."""
+    from ballaststudy.study.report import _extent
+    metrics, forms = inputs
+    for key, limits in ((("G_1-1", 0), ["settle after tamping: ...", "plate: ..."]),
+                        (("G_1-1", 1), [])):
+        with xr.open_dataset(metrics[key]) as f:
+            ds = f.load()
+        ds.attrs["rig_layout_json"] = json.dumps({"seed": 1, "stages_at_limit": limits})
+        ds.to_netcdf(metrics[key])
+    ds = xr.open_dataset(aggregate(metrics, forms, tmp_path / "study.nc")).load()
+    got = ds.assembly_stages_at_limit
+    assert got.sel(database="G_1-1").values.tolist() == [2, 0]
+    assert got.sel(database="box_test").values.tolist() == [-1, -1]
+    assert "1 of 2 cases were assembled with a stage stopped at its step limit" in _extent(ds)
+
+
 def test_units_are_converted(tmp_path, synth, inputs):
     metrics, forms = inputs
     p = tmp_path / "mm.nc"

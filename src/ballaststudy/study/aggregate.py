@@ -9,6 +9,7 @@ sieve, SD (eq. 3.3), percent passing 22.4 mm (Table 5-1), SI, FI, LI and the mea
 (mass-weighted mean of the middle dimension b, i.e. of the sieve-relevant size).
 """
 
+import json
 import math
 import re
 from pathlib import Path
@@ -90,6 +91,13 @@ def _case_series(path, ds):
     return np.asarray(cycles), out, extra
 
 
+def _stages_at_limit(ds):
+    """How many of the case's assembly stages stopped at their step limit (the rig layout
+    its metrics file carries); -1 where the file does not record it."""
+    layout = json.loads(ds.attrs.get("rig_layout_json", "{}"))
+    return len(layout["stages_at_limit"]) if "stages_at_limit" in layout else -1
+
+
 def database_coordinates(forms_ds):
     """Database-level numbers from a form database (generated values, via validation_row)."""
     row = validation_row(forms_ds)
@@ -142,8 +150,10 @@ def build_study(metrics, forms, groups=None):
     shape = (len(dbs), len(cases), len(cycles))
     arrays = {n: np.full(shape, np.nan) for n in list(BEHAVIOURS) + extra_names}
     run = np.zeros(shape[:2], dtype=np.int32)
+    at_limit = np.full(shape[:2], -1, dtype=np.int32)
     for (db, case), (cyc, vals, extra) in series.items():
         i, j = dbs.index(db), cases.index(case if not isinstance(cases[0], str) else str(case))
+        at_limit[i, j] = _stages_at_limit(metrics[(db, case)][1])
         k = np.searchsorted(cycles, cyc)
         for n in BEHAVIOURS:
             arrays[n][i, j, k] = vals[n]
@@ -157,6 +167,9 @@ def build_study(metrics, forms, groups=None):
         data[n] = (dims, arrays[n], dict(first_extra[n][1]))
     data["cycles_run"] = (("database", "case"), run,
                           {"units": "1", "long_name": "loading cycles in the case's metrics file (0: no file)"})
+    data["assembly_stages_at_limit"] = (("database", "case"), at_limit, {
+        "units": "1", "long_name": "assembly stages of the case that stopped at their step limit, not "
+                                   "at their criterion (its assembled.nc names them; -1: not recorded)"})
     dbc = {db: database_coordinates(forms[db][1]) for db in dbs}
     coords = {
         "database": ("database", np.array(dbs, dtype=object), {"long_name": "form database (Table 3-1)"}),

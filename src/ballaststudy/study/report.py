@@ -113,7 +113,14 @@ def _extent(study):
             f"up to {study.sizes['cycle']} cycles")
     if (run > 0).any():
         text += f" (cases ran {int(run[run > 0].min())}-{int(run.max())} cycles)"
-    return text + "."
+    text += "."
+    if "assembly_stages_at_limit" in study:
+        limits = study["assembly_stages_at_limit"].values
+        if (limits >= 0).any():
+            text += (f" {int((limits > 0).sum())} of {int((limits >= 0).sum())} cases were assembled "
+                     "with a stage stopped at its step limit, not at its criterion (study.nc: "
+                     "assembly_stages_at_limit; each case's assembled.nc names the stages).")
+    return text
 
 
 def write_report(study, out_dir, n_boot=2000, seed=0, study_path=None):
