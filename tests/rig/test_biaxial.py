@@ -301,6 +301,26 @@ def test_a_deviator_beyond_the_strength_fails_the_specimen(specimen, tmp_path, s
         assert ds.attrs["failed"] == 1 and ds.attrs["failure"] == run.s.failure and ds.sizes["cycle"] == 0
 
 
+def test_a_collapse_under_applied_loads_is_caught_within_the_watch(specimen):
+    """Under applied loads the platen is a body whose speed has no bound: a sinusoid raised
+    in cycle 1 far beyond the strength (3000 kPa) accelerates it into a collapsing
+    specimen. The engine runs between failure checks are short enough that the run ends
+    within a quarter of softening_strain past failure_axial_strain (watched at the sine's
+    v_max instead, one run of the engine carried it 1.2 % of axial strain past it)."""
+    rig = BiaxialRig.load(specimen)
+    p = rig.params
+    assert p.load_control == "applied_force"
+    run = BiaxialRun(rig, cycles=4)
+    while not (run.s.phase == "cyclic" and run.s.cycle >= 1):
+        run.advance()
+    p.deviator_max_kPa = 3000.0
+    run.control.set(run.ids.sine, hi=p.axial_bounds_Pa[1])
+    run.run()
+    assert run.s.failure.startswith("the specimen failed in cycle 1: axial strain")
+    past = run.strains()[0] - p.failure_axial_strain
+    assert 0.0 <= past < 0.25 * p.softening_strain, past
+
+
 def test_a_cycle_beyond_max_cycle_steps_fails_the_specimen(specimen):
     """A cycle of the sinusoid that does not end within max_cycle_steps ends the run as a
     failure in that cycle (after cycle 0, which the cap does not cut: it had 1000 steps)."""

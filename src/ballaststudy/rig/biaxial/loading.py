@@ -190,15 +190,23 @@ class BiaxialRun(CyclicRun):
         super().advance(max_steps or self._steps_to_watch())
 
     def _steps_to_watch(self):
-        """While loading: at most the steps in which the platen, at its largest speed,
-        travels a quarter of softening_strain (check_stalled runs after each run of the
-        engine, so a softening specimen is caught within 1.25 x softening_strain); else
-        None (a control buffer)."""
+        """While loading: at most the steps in which the platen travels a quarter of
+        softening_strain (check_stalled runs after each run of the engine, so a softening
+        specimen is caught within 1.25 x softening_strain, a failing one within a quarter
+        of it past failure_axial_strain): at its largest speed, or, driven by an applied
+        load, accelerating from its speed now under its largest load with nothing below it
+        (a collapse; its speed has no bound); else None (a control buffer)."""
         s, p, c = self.s, self.rig.params, self.control
         if s.phase not in ("loading", "cyclic"):
             return None
-        v = c.get(self.ids.profile if c.get(self.ids.profile, "active") else self.ids.sine, "v_max")
-        n = int(0.25 * p.softening_strain * self.rig.height() / (v * self.rig.sim.dt))
+        k = self.ids.profile if c.get(self.ids.profile, "active") else self.ids.sine
+        dt, travel = self.rig.sim.dt, 0.25 * p.softening_strain * self.rig.height()
+        n = int(travel / (c.get(k, "v_max") * dt))
+        mu = c.get(k, "areal_mass") if k == self.ids.sine else 0.0
+        if mu > 0.0:
+            a = c.get(k, "hi") / mu
+            v0 = abs(float(self.rig.sim.walls.vel[self.rig.layout.top[0], 1]))
+            n = min(n, int((np.sqrt(v0 * v0 + 2.0 * a * travel) - v0) / (a * dt)))
         return max(c.every, min(n, (c.capacity - 1) * c.every) // c.every * c.every)
 
     def on_window(self, controller):
