@@ -285,6 +285,15 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         pos0[i, 0] = x
         pos0[i, 1] = y
 
+    @cuda.jit(device=True, inline=True)
+    def pair_springs(coef, mat, rad, b, i, j, t):
+        """A ball-ball contact's springs on ball i: (k_n + k_s, k_s R_i^2 + k_r), the bodies
+        in the CPU's order (integrate._add_pair_springs)."""
+        lo = min(i, j)
+        hi = max(i, j)
+        kn, ks, kr = contact_stiffness(LAW, row(coef, b, mat[lo], mat[hi]), rad[lo], rad[hi], t)
+        return kn + ks, ks * rad[i] * rad[i] + kr
+
     @cuda.jit
     def scale_masses(pos0, rad, mass, inertia, minv, iinv, mat, alive, case, cfg, coef, nb,
                      nbn, wl, wln, wmat, bl, bln, bij, bc, bactive, clump, need):
@@ -303,13 +312,9 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         ktr = 0.0
         krot = 0.0
         for k in range(nbn[i]):
-            j = nb[k, i]
-            lo = min(i, j)
-            hi = max(i, j)
-            kn, ks, kr = contact_stiffness(LAW, row(coef, b, mat[lo], mat[hi]), rad[lo],
-                                           rad[hi], t)
-            ktr += kn + ks
-            krot += ks * ri * ri + kr
+            k_tr, k_rot = pair_springs(coef, mat, rad, b, i, nb[k, i], t)
+            ktr += k_tr
+            krot += k_rot
         for k in range(wln[i]):
             s = wl[k, i]
             kn, ks, kr = contact_stiffness(LAW, row(coef, b, wmat[s], mat[i]), 0.0, ri, t)
@@ -325,12 +330,9 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             dy = pos0[j, 1] - pos0[i, 1]
             cut = ri + rad[j] + skin
             if dx * dx + dy * dy < cut * cut:    # (i is free: never i's own clump)
-                lo = min(i, j)
-                hi = max(i, j)
-                kn, ks, kr = contact_stiffness(LAW, row(coef, b, mat[lo], mat[hi]), rad[lo],
-                                               rad[hi], t)
-                ktr += kn + ks
-                krot += ks * ri * ri + kr
+                k_tr, k_rot = pair_springs(coef, mat, rad, b, i, j, t)
+                ktr += k_tr
+                krot += k_rot
             a = 2.0 * bc[RBAR, q] * t
             ktr += (bc[KN, q] + bc[KS, q]) * a
             krot += bc[KN, q] * t * (2.0 * bc[RBAR, q]) ** 3 / 12.0 + bc[KS, q] * a * ri * ri
