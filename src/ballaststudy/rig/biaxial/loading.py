@@ -313,11 +313,10 @@ class BiaxialRun(CyclicRun):
         -C d(target)/dt with the C of its kind, so the servo only corrects what C does not
         foresee, and the bound the branch before missed (its extreme comes late, in this
         branch: the commanded bound moves by the miss; not cycle 0's, the profile's).
-        Quasi-static: the
-        frequency of the bounds for the larger C of the two kinds (they hold for the whole
-        cycle; an unloading's C reads low while the specimen creeps down: with the coming
-        branch's C the frequency rose fourfold over 15 cycles of creep on a small specimen,
-        until it gave way)."""
+        Quasi-static: the frequency of the bounds for the larger C of the two kinds (they
+        hold for the whole cycle; an unloading's C reads low while the specimen creeps down:
+        with the coming branch's C the frequency rose fourfold over 15 cycles of creep on a
+        small specimen, until it gave way)."""
         p, s = self.rig.params, self.s
         k0, k1 = s.half_sample0, len(self.samples["step"]) - 1
         if k0 < 0 or k1 <= k0:
