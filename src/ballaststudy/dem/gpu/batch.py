@@ -1,18 +1,29 @@
 """A batch of independent 2D DEM cases stepped together on one GPU.
 
-``Batch.from_simulations(sims)`` copies B built ``Simulation`` s (balls, wall segments,
-contact table, gravity, dt) into one set of device arrays: the balls of all cases end to
-end with a case index, each case with its own dt, gravity, domain, cell grid, walls and
-contact coefficients. ``run(n)`` advances every case n steps (a few kernel launches per
-step, kernels.py); ``to_simulations(sims)`` writes the state back.
+``Batch.from_simulations(sims, controls)`` copies B built ``Simulation`` s (balls, wall
+segments, contact table, gravity, dt) and their controllers (``control.Control``, or None)
+into one set of device arrays: the balls of all cases end to end with a case index, each
+case with its own dt, gravity, domain, cell grid, walls, contact coefficients, time, step
+and controllers. ``run(n)`` advances every case n steps (a few kernel launches per step,
+kernels.py), or to its first event; ``to_simulations(sims)`` and ``to_controls(controls)``
+write the state back.
+
+Each case steps on its own budget: ``start(cases, n)`` gives halted cases n more steps,
+``advance()`` steps until some case halts (its budget spent, or an event of its
+controllers: the window of a servo, a reversal...) and names it. A halted case waits,
+its threads idle, while the others step on; its host reacts (reads and drains its
+controllers, sets new targets) and starts it again: a rig's "run k steps, measure,
+decide" loop, per case, with no step of any case lost or repeated.
 
 What the batch holds today: balls (free or with held velocities, local damping, external
 loads), kinematic wall segments (constant velocity and spin), every contact law of
 ``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU), flat joints
 (failure, breakage log, interface removal; kernels.flat_joint), clumps (free or held),
-density scaling at a fixed dt (kernels.scale_masses, at every rebuild of a case).
-Checkpoints go through the CPU: ``to_simulations`` then ``Simulation.save_checkpoint``.
-Not yet: controllers and the automatic dt (a simulation that uses one of them is refused,
+density scaling at a fixed dt (kernels.scale_masses, at every rebuild of a case),
+controllers (every sensor, actuator and controller of control.py, driven bodies
+included: the CPU's own functions per case, kernels.case_control). Checkpoints go through
+the CPU: ``to_simulations`` then ``Simulation.save_checkpoint`` (and the rig's
+``Control.to_dict``). Not yet: the automatic dt (a simulation that uses it is refused,
 ``BatchError``, never run differently), and the energy accounts (the batch books no
 dissipated work).
 """
@@ -32,6 +43,8 @@ except ImportError:
     _core_launch = None
 
 from .. import params as P
+from ..control import (CLUMP_POSITION, CLUMP_REACTION, EVERY, HELD_CLUMP, NCFG, NPAR, NSAMP,
+                       NST, Control)
 from ..state import Pairs, WallPairs
 from . import kernels as K
 
@@ -95,10 +108,16 @@ class Batch:
         self.n_cases = n_cases
         self.n_balls = host["pos"].shape[0]
         self.n_segments = host["seg"].shape[0]
-        self.moving = int(np.any(host["wvel"] != 0.0) or np.any(host["womega"] != 0.0))
-        self.steps = 0                # since the last to_simulations
-        self._clock_exported = 0      # steps, and breakage-log entries, already exported
-        self._log_exported = 0
+        self.controlled = bool(np.any(host["ccfg"][:, EVERY] > 0))
+        self.moving = int(self.controlled or np.any(host["wvel"] != 0.0)
+                          or np.any(host["womega"] != 0.0))
+        self.steps = 0                # launched since the last to_simulations
+        self._clock_exported = np.zeros(n_cases, np.int64)   # each case's steps, and the
+        self._log_exported = 0                               # log's entries, exported
+        self._remaining = np.zeros(n_cases, np.int64)   # launches a running case may need
+        self._started = []            # cases started since the last advance
+        self._controls = host.pop("controls")
+        self._control_dims = host["cdim"].copy()
         self._offsets = host.pop("offsets")
         self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
         self._bond_offsets = host.pop("bond_offsets")
@@ -117,17 +136,21 @@ class Batch:
                       self.d["cell_n"], self.d["bcell"])
 
     @classmethod
-    def from_simulations(cls, sims):
-        """Copy built simulations (same contact law) into one batch."""
+    def from_simulations(cls, sims, controls=None):
+        """Copy built simulations (same contact law) into one batch, each with its built
+        ``Control`` (or None) from ``controls``. Every case starts halted."""
         if not sims:
             raise BatchError("an empty batch")
+        controls = [None] * len(sims) if controls is None else list(controls)
+        if len(controls) != len(sims):
+            raise BatchError(f"{len(controls)} controls for {len(sims)} cases")
         law = sims[0].law.layout()
         for k, s in enumerate(sims):
             if s.law.layout() != law:
                 raise BatchError(f"case {k}: another contact law than case 0's")
             _check(s, k)
             s.prepare()
-        return cls(law, *_pack(sims))
+        return cls(law, *_pack(sims, controls))
 
     def _launch(self, name, n, *args):
         if n <= 0:
@@ -176,46 +199,107 @@ class Batch:
                      d["bl"], d["bln"], d["bij"], d["bc"], d["bactive"], d["clump"],
                      d["need"])
 
+    def start(self, cases, n_steps):
+        """Give the (halted) ``cases`` ``n_steps`` more steps each; a case's controllers, as
+        its host left them (``to_controls`` read them at its halt), go to the device with
+        it. The next ``advance`` resumes them."""
+        cases = [int(b) for b in np.atleast_1d(cases)]
+        if n_steps <= 0 or not cases:
+            return self
+        halt = self.d["halt"].copy_to_host()
+        busy = [b for b in cases if halt[b] == K.RUNNING]
+        if busy:
+            raise BatchError(f"case(s) {busy} are still running")
+        left = self.d["left"].copy_to_host()
+        for b in cases:
+            halt[b] = K.RUNNING
+            left[b] = n_steps
+            self._remaining[b] = n_steps
+            if self._controls[b] is not None:
+                self._push_control(b)
+        self.d["halt"].copy_to_device(halt)
+        self.d["left"].copy_to_device(left)
+        self._started.extend(cases)
+        return self
+
+    def advance(self, check_every=1000):
+        """Step the running cases until a check (every ``check_every`` steps) finds one or
+        more halted: returns {case: halt code (kernels.HALT_STEPS, HALT_EVENT)} of those
+        halted since the last advance ({} if none was running). A case that halts within
+        a chunk idles until it ends. A failed case raises BatchError."""
+        d = self.d
+        if self._started:
+            self._started = []
+            self._launch("cases_resume", self.n_cases, d["halt"], *self._control_args())
+        halted = {}
+        while not halted:
+            running = self._remaining > 0
+            if not running.any():
+                break
+            chunk = int(min(check_every, self._remaining[running].max()))
+            for _ in range(chunk):
+                self._step()
+            self._raise_errors()
+            halt = d["halt"].copy_to_host()
+            self._remaining[running] -= chunk
+            for b in np.flatnonzero(running):
+                if halt[b] != K.RUNNING:
+                    halted[int(b)] = int(halt[b])
+                    self._remaining[b] = 0
+        return halted
+
     def run(self, n_steps, check_every=1000):
-        """Advance every case ``n_steps`` steps; the error flags are read every
-        ``check_every`` steps and at the end (a failed case raises BatchError).
-        With ``self.timer`` a dict, each kernel's time is added to it (slower)."""
+        """Advance every case ``n_steps`` steps, or to its controllers' first event (as
+        ``Simulation.run(n, control=...)``): ``start`` them all, ``advance`` until every
+        one halted. The error flags are read every ``check_every`` steps and at the end
+        (a failed case raises BatchError). With ``self.timer`` a dict, each kernel's time
+        is added to it (slower)."""
+        self.start(range(self.n_cases), n_steps)
+        while self.advance(check_every):
+            pass
+        return self
+
+    def _step(self):
+        """One step of every running case: the kernels in their order (kernels.py)."""
         d = self.d
         nb = self.n_balls
-        for k in range(n_steps):
-            self._launch("walls_step", max(self.n_segments, self.n_cases), d["seg"],
-                         d["wvel"], d["womega"], d["centre"], d["wforce"], d["wmoment"],
-                         d["wcase"], d["travel"], d["cfg"], self.moving, d["need"],
-                         d["clock"])
-            self._launch("first_half", nb, d["pos"], d["vel"], d["omega"], d["vend"],
-                         d["wend"], d["force"], d["minv"], d["iinv"], d["fix"], d["alive"],
-                         d["case"], d["pos0"], d["cfg"], d["travel"], d["need"],
-                         d["relist"], d["clump"])
-            self._launch("clumps_first", self.n_clumps, d["cpos"], d["cvel"], d["comega"],
-                         d["ctheta"], d["cmass"], d["cinertia"], d["cheld"], d["cforce"],
-                         d["cmoment"], d["ccase"], d["cfg"], d["pstart"], d["pidx"],
-                         d["offset"], d["alive"], d["pos"], d["vel"], d["omega"], d["pos0"],
-                         d["travel"], d["need"])
-            self._build_lists()
-            self._scale_masses()
-            self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
-                         d["rad"], d["mass"], d["minv"], d["iinv"], d["fix"], d["damp"],
-                         d["mat"], d["alive"], d["case"], d["fext"], d["force"], d["cfg"],
-                         d["coef"], d["nb"], d["nbn"], d["nh"], d["seg"], d["link"],
-                         d["wvel"], d["womega"], d["centre"], d["wmat"], d["wl"], d["wln"],
-                         d["wh"], d["wforce"], d["wmoment"], d["need"], d["cell_n"],
-                         d["bcell"], d["bl"], d["bln"], d["bij"], d["bc"],
-                         d["bsc"], d["bstate"], d["bfn"], d["bfs"], d["bactive"], d["relist"],
-                         d["clock"], d["logi"], d["logf"], d["logn"], d["clump"], d["err"])
-            self._launch("clumps_second", self.n_clumps, d["cpos"], d["cvel"], d["comega"],
-                         d["ctheta"], d["cmass"], d["cinertia"], d["cheld"], d["cforce"],
-                         d["cmoment"], d["cdamp"], d["ccase"], d["cfg"], d["pstart"],
-                         d["pidx"], d["offset"], d["alive"], d["pos"], d["force"], d["vend"],
-                         d["wend"], d["err"])
-            self.steps += 1
-            if (k + 1) % check_every == 0 or k == n_steps - 1:
-                self._raise_errors()
-        return self
+        self._launch("walls_step", max(self.n_segments, self.n_cases), d["seg"], d["wvel"],
+                     d["womega"], d["centre"], d["wforce"], d["wmoment"], d["wcase"],
+                     d["travel"], d["cfg"], self.moving, d["need"], d["clock"], d["halt"])
+        self._launch("first_half", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
+                     d["force"], d["minv"], d["iinv"], d["fix"], d["alive"], d["case"],
+                     d["pos0"], d["cfg"], d["travel"], d["need"], d["relist"], d["clump"],
+                     d["halt"])
+        self._launch("clumps_first", self.n_clumps, d["cpos"], d["cvel"], d["comega"],
+                     d["ctheta"], d["cmass"], d["cinertia"], d["cheld"], d["cforce"],
+                     d["cmoment"], d["ccase"], d["cfg"], d["pstart"], d["pidx"], d["offset"],
+                     d["alive"], d["pos"], d["vel"], d["omega"], d["pos0"], d["travel"],
+                     d["need"], d["halt"])
+        self._build_lists()
+        self._scale_masses()
+        self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
+                     d["rad"], d["mass"], d["minv"], d["iinv"], d["fix"], d["damp"],
+                     d["mat"], d["alive"], d["case"], d["fext"], d["force"], d["cfg"],
+                     d["coef"], d["nb"], d["nbn"], d["nh"], d["seg"], d["link"], d["wvel"],
+                     d["womega"], d["centre"], d["wmat"], d["wl"], d["wln"], d["wh"],
+                     d["wforce"], d["wmoment"], d["need"], d["cell_n"], d["bcell"], d["bl"],
+                     d["bln"], d["bij"], d["bc"], d["bsc"], d["bstate"], d["bfn"], d["bfs"],
+                     d["bactive"], d["relist"], d["clock"], d["logi"], d["logf"], d["logn"],
+                     d["clump"], d["err"], d["halt"])
+        self._launch("clumps_second", self.n_clumps, d["cpos"], d["cvel"], d["comega"],
+                     d["ctheta"], d["cmass"], d["cinertia"], d["cheld"], d["cforce"],
+                     d["cmoment"], d["cdamp"], d["ccase"], d["cfg"], d["pstart"], d["pidx"],
+                     d["offset"], d["alive"], d["pos"], d["force"], d["vend"], d["wend"],
+                     d["err"], d["halt"])
+        self._launch("cases_step", self.n_cases, d["halt"], d["left"], d["clock"], d["step0"],
+                     *self._control_args())
+        self.steps += 1
+
+    def _control_args(self):
+        d = self.d
+        return (d["prm"], d["cpos"], d["cvel"], d["comega"], d["cforce"], d["cmass"],
+                d["cheld"], d["seg"], d["wforce"], d["wvel"]) + tuple(
+                    d[k] for k in _CONTROL_ARRAYS) + (d["cdim"],)
 
     def _raise_errors(self):
         err = self.d["err"].copy_to_host()
@@ -234,6 +318,38 @@ class Batch:
         lo, hi = self._offsets[b], self._offsets[b + 1]
         return [self.d[n].copy_to_host()[lo:hi] for n in names]
 
+    def to_controls(self, cases=None):
+        """Write the device's state of the controllers into the ``Control`` s the batch was
+        made from (of ``cases``, default all): the last run's event, readings, window sums,
+        controller state and samples, as ``Simulation.run`` leaves them."""
+        h = {k: self.d[k].copy_to_host() for k in ("ccfg", "ccst", "cval", "cwsum", "csamp")}
+        cases = range(self.n_cases) if cases is None else cases
+        for b in cases:
+            ctl = self._controls[b]
+            if ctl is None:
+                continue
+            a = ctl.arrays
+            a.cfg[:] = h["ccfg"][b]
+            a.cst[:] = h["ccst"][b, :len(a.cst)]
+            a.val[:] = h["cval"][b, :len(a.val)]
+            a.wsum[:] = h["cwsum"][b, :len(a.wsum)]
+            n = int(a.cfg[NSAMP])
+            a.samp[:n] = h["csamp"][b, :n, :a.samp.shape[1]]
+        return self
+
+    def _push_control(self, b):
+        """Case b's controllers as its host left them (parameters, state, switches, scales,
+        pending velocities, the emptied sample buffer) onto the device."""
+        a = self._controls[b].arrays
+        dim = self._control_dims[b]
+        if (len(a.sensors), len(a.ctl)) != (dim[K.N_SENSORS], dim[K.N_CONTROLLERS]):
+            raise BatchError(f"case {b}: its controllers were rebuilt since the batch was made")
+        for key, v in (("ccfg", a.cfg), ("cscale", a.scale), ("cctl", a.ctl),
+                       ("ccpar", a.cpar), ("ccst", a.cst), ("cval", a.val), ("cwsum", a.wsum)):
+            row = np.ascontiguousarray(v)
+            if len(row):
+                self.d[key][b, :len(row)] = row
+
     def to_simulations(self, sims):
         """Write the state back into the simulations the batch was made from: balls,
         walls (positions, reactions), flat joints (state, the breakages since the last
@@ -241,6 +357,7 @@ class Batch:
         Their step and time advance by the steps run since the last call."""
         h = {k: v.copy_to_host() for k, v in self.d.items() if k in _EXPORTED}
         n_log = int(h["logn"][0])
+        steps = h["clock"] - self._clock_exported       # each case's since the last call
         for b, s in enumerate(sims):
             lo, hi = self._offsets[b], self._offsets[b + 1]
             s.balls.pos[:] = h["pos"][lo:hi]
@@ -252,18 +369,19 @@ class Batch:
             s.balls.iinv[:] = h["iinv"][lo:hi]
             w0, w1 = self._wall_offsets[b], self._wall_offsets[b + 1]
             for name, key in (("seg", "seg"), ("centre", "centre"), ("force", "wforce"),
-                              ("moment", "wmoment")):
+                              ("moment", "wmoment"), ("vel", "wvel")):    # (controllers)
                 getattr(s.walls, name)[:] = h[key][w0:w1]
             c0, c1 = self._clump_offsets[b], self._clump_offsets[b + 1]
-            for name in ("pos", "vel", "omega", "theta", "force", "moment"):
+            for name in ("pos", "vel", "omega", "theta", "force", "moment", "held"):
                 getattr(s.clumps, name)[:] = h["c" + name][c0:c1]
             self._bonds_to_cpu(h, s, b, n_log)
             _lists_to_cpu(h, s, lo, hi, w0)
-            s.cnt[0] += self.steps
-            s.prm[P.TIME] += self.steps * s.prm[P.DT]
+            s.cnt[0] += steps[b]
+            s.prm[P.TIME] = h["prm"][b, P.TIME]     # summed step by step, as on the CPU
         self._log_exported = n_log
-        self._clock_exported += self.steps
+        self._clock_exported = h["clock"]
         self.steps = 0
+        return self
 
     def _bonds_to_cpu(self, h, sim, b, n_log):
         """Case b's flat-joint state (side 0's copy) and its breakages logged since the
@@ -286,7 +404,7 @@ class Batch:
         log.ensure(k0 + len(order))
         for k, r in enumerate(order):
             q = int(li[r, 1]) - q0
-            since = int(li[r, 0]) - self._clock_exported    # the step since the last export
+            since = int(li[r, 0]) - self._clock_exported[b]   # its step since the last export
             i = int(bd.i[q])
             row = dict(step=int(sim.cnt[0]) + since, time=sim.prm[P.TIME] + since * sim.prm[P.DT],
                        bond=q, elem=int(li[r, 2]), i=i, j=int(bd.j[q]),
@@ -298,10 +416,10 @@ class Batch:
 
 
 # the device arrays to_simulations reads (each copied to the host once per call)
-_EXPORTED = ("pos", "vend", "wend", "force", "minv", "iinv", "seg", "centre", "wforce",
-             "wmoment", "cpos", "cvel", "comega", "ctheta", "cforce", "cmoment", "bsc",
-             "bstate", "bfn", "bfs", "bactive", "logi", "logf", "logn", "nb", "nbn", "nh",
-             "wl", "wln", "wh")
+_EXPORTED = ("clock", "prm", "pos", "vend", "wend", "force", "minv", "iinv", "seg", "centre",
+             "wforce", "wmoment", "wvel", "cpos", "cheld", "cvel", "comega", "ctheta", "cforce",
+             "cmoment", "bsc", "bstate", "bfn", "bfs", "bactive", "logi", "logf", "logn", "nb",
+             "nbn", "nh", "wl", "wln", "wh")
 
 
 def _lists_to_cpu(h, sim, lo, hi, w0):
@@ -333,8 +451,9 @@ def _lists_to_cpu(h, sim, lo, hi, w0):
     sim.cnt[2] = 1       # rebuilt (history carried) before the next CPU step
 
 
-def _pack(sims):
-    """Host arrays of the batch: the cases' balls and segments end to end."""
+def _pack(sims, controls):
+    """Host arrays of the batch: the cases' balls and segments end to end, their
+    controllers, each case's parameters, step and budget."""
     nball = [len(s.balls) for s in sims]
     nseg = [len(s.walls) for s in sims]
     offsets = np.concatenate([[0], np.cumsum(nball)]).astype(np.int64)
@@ -391,10 +510,55 @@ def _pack(sims):
     h["offsets"] = offsets
     h["relist"] = np.zeros(len(sims), np.int32)
     h["bond_offsets"] = np.concatenate([[0], np.cumsum([len(s.bonds) for s in sims])])
-    h["clock"] = np.zeros(1, np.int64)
+    h["clock"] = np.zeros(len(sims), np.int64)       # each case's steps in the batch
+    h["step0"] = np.array([s.cnt[0] for s in sims], np.int64)
+    h["prm"] = np.array([s.prm for s in sims])        # time and what the controllers read
+    h["halt"] = np.full(len(sims), K.HALT_STEPS, np.int32)
+    h["left"] = np.zeros(len(sims), np.int64)
     _pack_bonds(sims, offsets, h)
     _pack_clumps(sims, offsets, h)
+    _pack_controls(controls, woff, h["clump_offsets"], h)
     return h, len(sims), cells, max_cell
+
+
+# the packed controller arrays, in ControlArrays' order (control.py)
+_CONTROL_ARRAYS = ("ccfg", "csens", "cmemb", "cscale", "cact", "cctl", "ccpar", "ccst", "cval",
+                   "cwsum", "csamp")
+
+
+def _pack_controls(controls, woff, coff, h):
+    """Each case's controllers (a built ``Control`` or None) in rows of padded arrays, one
+    row per case (``cdim``: its counts, kernels.N_SENSORS...), wall segments and clumps
+    renumbered as the batch's."""
+    arrs = [Control.empty() if c is None else c.arrays for c in controls]
+    for b, (c, a) in enumerate(zip(controls, arrs)):
+        if c is not None and a is None:
+            raise BatchError(f"case {b}: its Control is not built")
+    dims = np.array([(len(a.sensors), len(a.members), len(a.actuators), len(a.ctl),
+                      len(a.samp) if len(a.sensors) else 0) for a in arrs],
+                    np.int64).reshape(-1, 5)
+    ns, nm, na, nk, cap = (max(int(v), 1) for v in dims.max(axis=0, initial=0))
+    n = len(arrs)
+    out = dict(ccfg=np.zeros((n, NCFG), np.int64), csens=np.zeros((n, ns, 4), np.int64),
+               cmemb=np.zeros((n, nm), np.int64), cscale=np.zeros((n, ns)),
+               cact=np.zeros((n, na, 4), np.int64), cctl=np.zeros((n, nk, 4), np.int64),
+               ccpar=np.zeros((n, nk, NPAR)), ccst=np.zeros((n, nk, NST)),
+               cval=np.zeros((n, ns)), cwsum=np.zeros((n, ns)),
+               csamp=np.zeros((n, cap, ns + 1)))
+    for b, a in enumerate(arrs):
+        sens = a.sensors.copy()
+        on_clump = (sens[:, 0] == CLUMP_REACTION) | (sens[:, 0] == CLUMP_POSITION)
+        sens[on_clump, 1] += coff[b]
+        act = a.actuators.copy()
+        act[act[:, 0] == HELD_CLUMP, 1] += coff[b]
+        out["ccfg"][b] = a.cfg
+        for key, v in (("csens", sens), ("cmemb", a.members + woff[b]), ("cscale", a.scale),
+                       ("cact", act), ("cctl", a.ctl), ("ccpar", a.cpar), ("ccst", a.cst),
+                       ("cval", a.val), ("cwsum", a.wsum)):
+            out[key][b, :len(v)] = v
+    h.update(out)
+    h["cdim"] = dims
+    h["controls"] = list(controls)
 
 
 def _pack_clumps(sims, offsets, h):

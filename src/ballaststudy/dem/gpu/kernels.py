@@ -19,7 +19,7 @@ adjacent rows.
 One step, in launch order (each a kernel over the index named); launches are few because
 each costs microseconds of the host even when prepared (batch._Prepared):
   walls_step (segment; case): reset the reaction, move the segment, add its travel to the
-      case's; clear the case's rebuild flag
+      case's; clear the case's rebuild flag, count its step
   first_half (ball): half kick (from the full-step velocity), drift; a ball whose
       displacement since the build, doubled, plus the wall travel exceeds the skin flags
       its case (the CPU rebuilds on its own exact criterion: the build times differ, the
@@ -32,17 +32,26 @@ each costs microseconds of the host even when prepared (batch._Prepared):
   forces (ball): empty the cells of a rebuilt case, contacts, walls, flat joints, weight
       and load, local damping, half kick, guards (a pebble keeps its raw force)
   clumps_second (clump): pebble forces gathered, damping, half kick, pebble velocities
+  cases_step (case): time, controllers (case_control: the CPU's control_step on the case's
+      rows), budget; an event or a spent budget halts the case
+Every kernel skips the balls, segments and clumps of a halted case (``halt``), so a case
+waits unchanged until its host resumes it (cases_resume first imposes the velocities an
+event left pending, as a CPU run does at its start).
 (unbin empties the cells after the batch's first build, which precedes the first step.)
 """
 import math
+from collections import namedtuple
 
 from numba import cuda, njit
 from numba.core import config
 
+from .. import params as P
 from ..bonds import (MODE_SHEAR, MODE_TENSION, broken_element, joint_frame, strip_energy,
                      strip_integrals)
 from ..clumps import pebble_motion
+from ..control import EVERY, PENDING, ControlArrays, actuate, control_step
 from ..integrate import locally_damped
+from ..jit import NO_NRT
 from ..neighbours import seg_closest
 from ..submodels import NCOEF, WIDTH, contact_force, contact_stiffness, lf
 from ..walls import wall_contact_point
@@ -56,6 +65,14 @@ NCFG = 12
 RBAR, D0, GI, KN, KS, SIGC, COH, TANPHI, MU = range(9)
 THETA, MOMENT = 0, 1
 ERR_NEIGHBOURS, ERR_CELL, ERR_WALLS, ERR_GUARD = 1, 2, 4, 8
+# a case's state (``halt``): stepping, halted after its budget of steps, halted by an event
+# of its controllers; a halted case's threads return at once until the host resumes it
+RUNNING, HALT_STEPS, HALT_EVENT = 0, 1, 2
+# the batch's clumps and walls with the fields the controllers read and drive (control.py)
+ClumpView = namedtuple("ClumpView", "pos vel omega force mass held")
+WallView = namedtuple("WallView", "seg force vel")
+# a case's counts in the packed controller arrays (``cdim`` columns)
+N_SENSORS, N_MEMBERS, N_ACTUATORS, N_CONTROLLERS, N_SAMPLES = range(5)
 ERROR_TEXT = {ERR_NEIGHBOURS: "a ball has more neighbours than the list holds",
               ERR_CELL: "a cell holds more balls than it has room for",
               ERR_WALLS: "a ball is near more wall segments than its list holds",
@@ -82,6 +99,28 @@ def cell_of(cfg, grid, b, x, y):
     return cx, cy
 
 
+@njit(**NO_NRT)
+def case_control(b, prm, step, resume, cpos, cvel, comega, cforce, cmass, cheld, seg, wforce,
+                 wvel, ccfg, csens, cmemb, cscale, cact, cctl, ccpar, ccst, cval, cwsum, csamp,
+                 cdim):
+    """Case b's controllers (control.py) on its rows of the packed arrays (ball, segment and
+    clump indices there are the batch's): at a resume the velocities an event left
+    pending; else the control step after a step (True: an event)."""
+    ns = cdim[b, N_SENSORS]
+    nk = cdim[b, N_CONTROLLERS]
+    c = ControlArrays(ccfg[b], csens[b, :ns], cmemb[b, :cdim[b, N_MEMBERS]], cscale[b, :ns],
+                      cact[b, :cdim[b, N_ACTUATORS]], cctl[b, :nk], ccpar[b, :nk],
+                      ccst[b, :nk], cval[b, :ns], cwsum[b, :ns],
+                      csamp[b, :cdim[b, N_SAMPLES], :ns + 1])
+    clumps = ClumpView(cpos, cvel, comega, cforce, cmass, cheld)
+    walls = WallView(seg, wforce, wvel)
+    if resume:
+        if c.cfg[PENDING] > 0:
+            actuate(clumps, walls, c)
+        return False
+    return control_step(prm[b], step, clumps, walls, c)
+
+
 if config.ENABLE_CUDASIM:
     # numba's CUDA simulator runs the kernels as Python and hands them wrapped arrays,
     # which compiled functions cannot take: give those the numpy arrays they wrap
@@ -97,6 +136,7 @@ if config.ENABLE_CUDASIM:
     wall_contact_point = _unwrapped(wall_contact_point)
     row = _unwrapped(row)
     cell_of = _unwrapped(cell_of)
+    case_control = _unwrapped(case_control)
 
 _compiled = {}
 
@@ -115,13 +155,13 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
 
     @cuda.jit
     def walls_step(seg, wvel, womega, centre, wforce, wmoment, wcase, travel, cfg, moving,
-                   need, clock):
+                   need, clock, halt):
         s = cuda.grid(1)
-        if s == 0:
-            clock[0] += 1     # the step under way (1 = the batch's first), for the log
         if s < need.shape[0]:
             need[s] = 0       # this step's first_half flags the cases to rebuild
-        if s >= seg.shape[0]:
+            if halt[s] == 0:
+                clock[s] += 1     # the case's step under way (1 = its first in the batch)
+        if s >= seg.shape[0] or halt[wcase[s]] != 0:
             return
         wforce[s, 0] = 0.0
         wforce[s, 1] = 0.0
@@ -147,11 +187,13 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
 
     @cuda.jit
     def first_half(pos, vel, omega, vend, wend, force, minv, iinv, fix, alive, case, pos0,
-                   cfg, travel, need, relist, clump):
+                   cfg, travel, need, relist, clump, halt):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0 or clump[i] >= 0:
             return            # (a clump's pebbles: clumps_first)
         b = case[i]
+        if halt[b] != 0:
+            return
         dt = cfg[b, DT]
         h = 0.5 * dt
         f = fix[i]
@@ -352,7 +394,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
 
     @cuda.jit(device=True)
     def flat_joint(q, side, pos, vel, omega, rad, dt, t, bij, bc, bsc, bstate, bfn, bfs,
-                   bactive, clock, logi, logf, logn, eacc):
+                   bactive, step, logi, logf, logn, eacc):
         """Flat joint q evaluated by the thread of its ball ``side`` (0: i, 1: j) on that
         side's copy of its state, as bonds.py does it (theta advanced, elements with
         failure, broken elements' response, the interface removed when apart): both
@@ -391,7 +433,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                     if side == 0:
                         k = cuda.atomic.add(logn, 0, 1)
                         se = a + 0.5 * le
-                        logi[k, 0] = clock[0]
+                        logi[k, 0] = step
                         logi[k, 1] = q
                         logi[k, 2] = e
                         logi[k, 3] = MODE_TENSION if tension else MODE_SHEAR
@@ -430,11 +472,13 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
     def forces(pos, vel, omega, vend, wend, rad, mass, minv, iinv, fix, damp, mat, alive,
                case, fext, force, cfg, coef, nb, nbn, nh, seg, link, wvel, womega, centre, wmat, wl,
                wln, wh, wforce, wmoment, need, cell_n, bcell, bl, bln, bij, bc, bsc,
-               bstate, bfn, bfs, bactive, relist, clock, logi, logf, logn, clump, err):
+               bstate, bfn, bfs, bactive, relist, clock, logi, logf, logn, clump, err, halt):
         i = cuda.grid(1)
         if i >= pos.shape[0] or alive[i] == 0:
             return
         b = case[i]
+        if halt[b] != 0:
+            return
         if need[b] != 0:
             cell_n[bcell[i]] = 0      # the build is done: empty the cells for the next one
         dt = cfg[b, DT]
@@ -507,8 +551,8 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             if bactive[side, q] == 0:
                 continue
             gone, gx, gy, m = flat_joint(q, side, pos, vel, omega, rad, dt, thick, bij, bc, bsc,
-                                         bstate, bfn, bfs, bactive, clock, logi, logf, logn,
-                                         eacc)
+                                         bstate, bfn, bfs, bactive, clock[b], logi, logf,
+                                         logn, eacc)
             fx += gx
             fy += gy
             mz += m
@@ -568,11 +612,11 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
     @cuda.jit
     def clumps_first(cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment,
                      ccase, cfg, pstart, pidx, offset, alive, pos, vel, omega, pos0, travel,
-                     need):
+                     need, halt):
         """First half of the step of clump c (integrate.clumps_kick_drift), its pebbles
         placed (half-step velocities) and checked against the skin like free balls."""
         c = cuda.grid(1)
-        if c >= cpos.shape[0]:
+        if c >= cpos.shape[0] or halt[ccase[c]] != 0:
             return
         b = ccase[c]
         dt = cfg[b, DT]
@@ -596,12 +640,12 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
     @cuda.jit
     def clumps_second(cpos, cvel, comega, ctheta, cmass, cinertia, cheld, cforce, cmoment,
                       cdamp, ccase, cfg, pstart, pidx, offset, alive, pos, force, vend, wend,
-                      err):
+                      err, halt):
         """Second half of clump c: weight plus its pebbles' forces and moments (in ball
         order, as gather_clumps), local damping and half kick unless held, its pebbles'
         full-step velocities."""
         c = cuda.grid(1)
-        if c >= cpos.shape[0]:
+        if c >= cpos.shape[0] or halt[ccase[c]] != 0:
             return
         b = ccase[c]
         h = 0.5 * cfg[b, DT]
@@ -636,6 +680,37 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                                           wend[i]):
                 cuda.atomic.or_(err, b, ERR_GUARD)
 
+    @cuda.jit
+    def cases_step(halt, left, clock, step0, prm, cpos, cvel, comega, cforce, cmass, cheld,
+                   seg, wforce, wvel, ccfg, csens, cmemb, cscale, cact, cctl, ccpar, ccst,
+                   cval, cwsum, csamp, cdim):
+        """The end of a step, per running case (the CPU's order: engine.run_steps): its time
+        advances, its controllers run (an event halts it), its budget counts down (halted
+        when spent)."""
+        b = cuda.grid(1)
+        if b >= halt.shape[0] or halt[b] != RUNNING:
+            return
+        prm[b, P.TIME] += prm[b, P.DT]
+        if ccfg[b, EVERY] > 0 and case_control(
+                b, prm, step0[b] + clock[b], False, cpos, cvel, comega, cforce, cmass, cheld,
+                seg, wforce, wvel, ccfg, csens, cmemb, cscale, cact, cctl, ccpar, ccst, cval,
+                cwsum, csamp, cdim):
+            halt[b] = HALT_EVENT
+        left[b] -= 1
+        if left[b] <= 0 and halt[b] == RUNNING:
+            halt[b] = HALT_STEPS
+
+    @cuda.jit
+    def cases_resume(halt, prm, cpos, cvel, comega, cforce, cmass, cheld, seg, wforce, wvel,
+                     ccfg, csens, cmemb, cscale, cact, cctl, ccpar, ccst, cval, cwsum, csamp,
+                     cdim):
+        """Before a resumed case's first step: its pending velocities (as a CPU run starts)."""
+        b = cuda.grid(1)
+        if b < halt.shape[0] and halt[b] == RUNNING and ccfg[b, EVERY] > 0:
+            case_control(b, prm, 0, True, cpos, cvel, comega, cforce, cmass, cheld, seg, wforce,
+                         wvel, ccfg, csens, cmemb, cscale, cact, cctl, ccpar, ccst, cval,
+                         cwsum, csamp, cdim)
+
     return dict(walls_step=walls_step, first_half=first_half, bin=bin_balls, build=build,
                 scale_masses=scale_masses, unbin=unbin, forces=forces, clumps_first=clumps_first,
-                clumps_second=clumps_second)
+                clumps_second=clumps_second, cases_step=cases_step, cases_resume=cases_resume)
