@@ -118,6 +118,7 @@ class Batch:
         self._started = []            # cases started since the last advance
         self._controls = host.pop("controls")
         self._control_dims = host["cdim"].copy()
+        self._timestep = host["prm"][:, [P.DT, P.DSCALE, P.DT_SAFETY]].copy()
         self._offsets = host.pop("offsets")
         self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
         self._bond_offsets = host.pop("bond_offsets")
@@ -199,10 +200,12 @@ class Batch:
                      d["bl"], d["bln"], d["bij"], d["bc"], d["bactive"], d["clump"],
                      d["need"])
 
-    def start(self, cases, n_steps):
+    def start(self, cases, n_steps, sims=None):
         """Give the (halted) ``cases`` ``n_steps`` more steps each; a case's controllers, as
         its host left them (``to_controls`` read them at its halt), go to the device with
-        it. The next ``advance`` resumes them."""
+        it, and with ``sims`` (the batch's simulations, written back at the halt) its dt
+        and density scaling as its host may have changed them. The next ``advance``
+        resumes them."""
         cases = [int(b) for b in np.atleast_1d(cases)]
         if n_steps <= 0 or not cases:
             return self
@@ -217,6 +220,8 @@ class Batch:
             self._remaining[b] = n_steps
             if self._controls[b] is not None:
                 self._push_control(b)
+            if sims is not None:
+                self._push_timestep(b, sims[b])
         self.d["halt"].copy_to_device(halt)
         self.d["left"].copy_to_device(left)
         self._started.extend(cases)
@@ -349,6 +354,36 @@ class Batch:
             row = np.ascontiguousarray(v)
             if len(row):
                 self.d[key][b, :len(row)] = row
+
+    def _push_timestep(self, b, sim):
+        """Case b's dt and density scaling from its simulation, if its host changed them
+        (a rig scales its masses for loading): the new dt from the next step on, the case
+        rebuilt and its inertial masses raised now, as on the CPU."""
+        p = sim.prm
+        _check(sim, b)
+        old = self._timestep[b]
+        new = (p[P.DT], p[P.DSCALE], p[P.DT_SAFETY])
+        if new == tuple(old):
+            return
+        if old[1] > 0.0 and p[P.DSCALE] == 0.0:
+            raise BatchError(f"case {b}: density scaling switched off (not held yet)")
+        cfg = self.d["cfg"].copy_to_host()[b]
+        cfg[K.DT] = p[P.DT]
+        cfg[K.SCALE2] = (p[P.DT] / p[P.DT_SAFETY]) ** 2 if p[P.DSCALE] > 0.0 else 0.0
+        self.d["cfg"][b, :] = cfg
+        prm = self.d["prm"].copy_to_host()[b]
+        prm[[P.DT, P.DSCALE, P.DT_SAFETY]] = new
+        self.d["prm"][b, :] = prm
+        self._timestep[b] = new
+        self.scaled = self.scaled or cfg[K.SCALE2] > 0.0
+        need = np.zeros(self.n_cases, np.int32)     # (the other cases' builds are done)
+        need[b] = 1
+        self.d["need"].copy_to_device(need)
+        self._build_lists()         # now, as Simulation.prepare does before the next step:
+        self._scale_masses()        # its first half kick already on the new masses
+        d = self.d
+        self._launch("unbin", self.n_balls, d["alive"], d["case"], d["need"], d["cell_n"],
+                     d["bcell"])
 
     def to_simulations(self, sims):
         """Write the state back into the simulations the batch was made from: balls,
