@@ -2,8 +2,10 @@
 the outputs, the two horizons apart, nothing chosen with three tests - the rule cannot pass
 with fewer than six), and bad input in one line before any case runs (CLI and Snakefile)."""
 import json
+import os
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -102,6 +104,26 @@ def test_loop_checks_before_any_case(tiny, tmp_path, capsys, change, key):
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and key in line, line
     assert not out.exists() or not any(out.rglob("*.nc"))
+
+
+def test_the_cuda_backend_is_refused_without_a_gpu(tmp_path):
+    """--backend cuda where numba sees no CUDA GPU: one line naming the option, exit 2,
+    before anything is read or written (numba's CUDA simulator, which the GPU tests
+    switch on, is off in this process)."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    probe = subprocess.run([sys.executable, "-c", "from numba import cuda; print(cuda.is_available())"],
+                           env=env, capture_output=True, text=True)
+    if probe.stdout.strip() == "True":
+        pytest.skip("this machine has a CUDA GPU")
+    out = tmp_path / "out"
+    for command in ("loop", "calibrate"):
+        r = subprocess.run([sys.executable, "-c", "import sys; from ballaststudy.cli import main; "
+                            "sys.exit(main(sys.argv[1:]))", command, "m.nc", "--conditions", "c.yaml",
+                            "--specimens", "s.nc", "--out-dir", str(out), "--backend", "cuda"],
+                           env=env, capture_output=True, text=True, cwd=tmp_path)
+        assert r.returncode == 2 and "\n" not in r.stderr.strip(), r.stderr
+        assert "--backend: cuda: numba sees no CUDA GPU" in r.stderr
+    assert not out.exists()
 
 
 def _workflow(tmp_path, change):

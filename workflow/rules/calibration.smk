@@ -32,10 +32,11 @@ rule calibrate:
         metrics=trigger("metrics"),
         out_dir=CAL_OUT,
         config=CONFIG_FILE,
+        backend=config["backend"],
     threads: 256      # Snakemake caps it at --cores (workflow.cores breaks snakemake --report)
     log:
         f"{RESULTS}/logs/calibration/calibrate.log",
     shell:
         "ballaststudy calibrate {input.measured} --conditions {input.conditions} "
         "--specimens {input.specimens} --out-dir {params.out_dir} --jobs {threads} "
-        "--config {params.config} --quiet > {log} 2>&1"
+        "--backend {params.backend} --config {params.config} --quiet > {log} 2>&1"

@@ -29,10 +29,11 @@ rule loop:
         metrics=trigger("metrics"),
         parameters=f"--parameters {CAL_OUT}/calibrated.yaml" if LOOP_CALIBRATED else "",
         config=CONFIG_FILE,
+        backend=config["backend"],
     threads: 256      # Snakemake caps it at --cores
     log:
         f"{RESULTS}/logs/loop/loop.log",
     shell:
         "ballaststudy loop {input.measured} --conditions {input.conditions} --specimens "
         "{input.specimens} {params.parameters} --out-dir {RESULTS}/loop --jobs {threads} "
-        "--config {params.config} --quiet > {log} 2>&1"
+        "--backend {params.backend} --config {params.config} --quiet > {log} 2>&1"

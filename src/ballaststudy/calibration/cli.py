@@ -28,6 +28,7 @@ from ..measured.importer import load_conditions
 from ..provenance import Recorder
 from ..rig.kinds import RUNS_TESTS, kind_for_test, kind_of, rig_classes
 from ..scenario.modifiers import MATERIAL, MODIFIERS, material_parameter
+from ..scenario.runner import BACKENDS, check_backend
 from .bayes import calibrate, rmse
 from .evaluate import Evaluator
 from .parametric import (DESIGN, cases_per_value, findings, parametric_dataset, plot_parameter,
@@ -175,6 +176,7 @@ def checked_targets(args, section_cfg, section):
 
 
 def _calibrate(args):
+    check_backend(args.backend)
     out = writable_dir(args.out_dir)
     cfg = load_config(args.config)
     cal = cfg["calibration"]
@@ -193,7 +195,7 @@ def _calibrate(args):
                         params={"calibration": cal}, seed=cfg["seed"])
     evaluate = Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          args.config, cal["cycles"], cal["quantity"], out, jobs=args.jobs,
-                         progress=not args.quiet)
+                         progress=not args.quiet, backend=args.backend)
     targets = [str(m) for m in args.measured]
     t0 = time.time()
     res = calibrate(evaluate, y, lower, upper, cal["initial_design"], cal["iterations"],
@@ -311,5 +313,7 @@ def target_arguments(c, specimens_help):
     c.add_argument("--specimens", required=True, nargs="+", type=Path, help=specimens_help)
     c.add_argument("--out-dir", required=True, type=Path)
     c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
+    c.add_argument("--backend", choices=BACKENDS, default="cpu",
+                   help="cpu: --jobs processes; cuda: every case in one GPU batch")
     c.add_argument("--config", default="config/config.yaml", type=Path)
     c.add_argument("--quiet", action="store_true")

@@ -32,6 +32,7 @@ from ..inputs import writable_dir
 from ..measured.importer import load_conditions
 from ..provenance import Recorder
 from ..scenario.modifiers import EFFECTS, MODIFIERS, load_material_values
+from ..scenario.runner import check_backend
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
 from .select import choose, held_out_plain, judge_candidate, residual_covariances
@@ -159,6 +160,7 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
 
 
 def _loop(args):
+    check_backend(args.backend)
     cfg = load_config(args.config)
     lp = cfg["loop"]
     out = writable_dir(args.out_dir)
@@ -174,7 +176,8 @@ def _loop(args):
     def make(names, effect=None, perturbation_m_s=0.0):
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
-                         progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s)
+                         progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s,
+                         backend=args.backend)
 
     plain_eval = make([])
     plain_at = plain_eval(np.zeros((1, 0)))[0]

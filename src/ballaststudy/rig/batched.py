@@ -76,7 +76,7 @@ class _Driver:
                 self.batch.start(cases, n, self.sims)
             self.stepping.update(asked)
             halted = self.batch.advance(self.check_every)
-            self.batch.to_simulations(self.sims).to_controls(list(halted))
+            self.batch.to_simulations(self.sims, list(halted)).to_controls(list(halted))
             with self.cond:
                 self.stepping.difference_update(halted)
                 self.woken.update(halted)

@@ -2,8 +2,9 @@
 specimen, takes the scenario's rig parameters, applies its modifiers in order (and the
 chaos probe's perturbation), then runs the cycles; a case with a checkpoint beside its
 output resumes from it (the modifiers' effects live in the checkpointed state, only their
-end-of-cycle hooks are attached again). ``run_cases`` runs many in parallel processes and
-skips finished ones, so an interrupted calibration or loop resumes."""
+end-of-cycle hooks are attached again). ``run_cases`` runs many in parallel processes, or
+all at once as one GPU batch (backend ``cuda``: rig.batched), and skips finished ones, so
+an interrupted calibration or loop resumes."""
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -11,9 +12,14 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from ..dem.gpu import cuda_available
 from ..inputs import open_netcdf
+from ..rig.batched import run_batched
 from ..rig.kinds import kind_of, rig_classes
+from ..schema import ConfigError
 from .modifiers import MODIFIERS
+
+BACKENDS = ("cpu", "cuda")
 
 
 def cached_case(root, scenario, k):
@@ -85,10 +91,23 @@ def run_case(scenario, k, out):
     return str(out)
 
 
-def run_cases(cases, jobs=1, progress=False, desc="cases"):
-    """Every (scenario, k, out) in ``cases``, ``jobs`` processes at a time."""
+def check_backend(backend):
+    """Refuse a backend this machine cannot run, in one line (before any work)."""
+    if backend not in BACKENDS:
+        raise ConfigError("command line", "--backend", f"{backend!r}: one of {', '.join(BACKENDS)}")
+    if backend == "cuda" and not cuda_available():
+        raise ConfigError("command line", "--backend", "cuda: numba sees no CUDA GPU here "
+                          "(a machine with one, and pip install -e '.[cuda]'), or use cpu")
+
+
+def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu"):
+    """Every (scenario, k, out) in ``cases``: ``jobs`` processes at a time (cpu), or every
+    unfinished case in GPU batches, one per contact law (cuda)."""
+    check_backend(backend)
     bar = tqdm(total=len(cases), desc=desc, unit="case", disable=not progress)
-    if jobs > 1 and len(cases) > 1:
+    if backend == "cuda":
+        _run_on_gpu(cases, bar)
+    elif jobs > 1 and len(cases) > 1:
         with ProcessPoolExecutor(jobs) as pool:
             for done in as_completed([pool.submit(run_case, *c) for c in cases]):
                 done.result()
@@ -98,3 +117,28 @@ def run_cases(cases, jobs=1, progress=False, desc="cases"):
             run_case(*c)
             bar.update()
     bar.close()
+
+
+def _run_on_gpu(cases, bar):
+    """The unfinished cases prepared (resumed or fresh) as run_case does, stepped together
+    (rig.batched.run_batched), each written as soon as it finishes."""
+    todo, where = {}, {}
+    for scenario, k, out in cases:
+        out = Path(out)
+        if out.is_file():
+            bar.update()
+            continue
+        out.parent.mkdir(parents=True, exist_ok=True)
+        run, _ = prepared_run(scenario, k, out)
+        todo.setdefault(run.rig.sim.law.layout(), []).append(run)
+        where[id(run)] = (scenario, k, out)
+
+    def job(run):
+        scenario, k, out = where[id(run)]
+        run.run()
+        write_case(run, scenario, k, out)
+        checkpoint_of(out).unlink(missing_ok=True)
+        bar.update()
+
+    for runs in todo.values():
+        run_batched(runs, job)

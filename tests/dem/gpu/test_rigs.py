@@ -9,8 +9,11 @@ import pytest
 from ballaststudy.dem.control import Control
 from ballaststudy.dem.gpu import BatchError
 from ballaststudy.rig.batched import run_batched
+from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRig, BiaxialRun, assemble_biaxial
 from ballaststudy.rig.cyclic import CyclicRun
+from ballaststudy.rig.library import load_library
 
+from ...biaxial_fast import FAST_LOADING
 from .beds import assert_same_motion
 
 
@@ -84,3 +87,36 @@ def test_a_run_the_batch_cannot_hold_is_refused_and_the_others_finish(beds):
     with pytest.raises(BatchError, match="case 1: BatchError: case 1: a run with a callback"):
         run_batched(runs, job, check_every=4)
     assert runs[0].s.phase == "done"
+
+
+def test_the_biaxial_rig_consolidates_on_the_batch_as_on_the_cpu(small_library, tmp_path):
+    """The biaxial rig itself (flat-jointed stones, the servos of its consolidation on the
+    platens and sides, density scaling), two specimens at p = 30 and 60 kPa: three engine
+    runs of its consolidation (4 steps each) on the batch as on the CPU within round-off."""
+    params = BiaxialParams(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000,
+                           fill_area_ratio=0.9, **FAST_LOADING)
+    assemble_biaxial(load_library(small_library), params, seed=7).save(tmp_path / "a.nc")
+
+    def runs():
+        out = []
+        for p in (30.0, 60.0):
+            rig = BiaxialRig.load(tmp_path / "a.nc")
+            rig.params.confining_pressure_kPa = p
+            out.append(BiaxialRun(rig, cycles=1))
+        return out
+
+    def job(run):
+        for _ in range(3):
+            run.advance(max_steps=4)
+
+    cpu = runs()
+    for r in cpu:
+        job(r)
+    gpu = run_batched(runs(), job, check_every=4)
+    for c, g in zip(cpu, gpu):
+        assert c.rig.sim.step == g.rig.sim.step and c.rig.sim.time == g.rig.sim.time
+        assert np.abs(c.rig.sim.walls.vel).max() > 0.0           # the platens move
+        assert_same_motion(c.rig.sim, g.rig.sim)
+        assert np.abs(c.rig.sim.walls.seg - g.rig.sim.walls.seg).max() < 1e-15
+        assert np.allclose(c.rig.sim.walls.vel, g.rig.sim.walls.vel, rtol=1e-9, atol=1e-15)
+        assert np.allclose(c.control.arrays.val, g.control.arrays.val, rtol=1e-9)

@@ -113,7 +113,7 @@ class Batch:
                           or np.any(host["womega"] != 0.0))
         self.steps = 0                # launched since the last to_simulations
         self._clock_exported = np.zeros(n_cases, np.int64)   # each case's steps, and the
-        self._log_exported = 0                               # log's entries, exported
+        self._log_exported = np.zeros(n_cases, np.int64)    # log's entries, exported
         self._remaining = np.zeros(n_cases, np.int64)   # launches a running case may need
         self._started = []            # cases started since the last advance
         self._controls = host.pop("controls")
@@ -385,15 +385,17 @@ class Batch:
         self._launch("unbin", self.n_balls, d["alive"], d["case"], d["need"], d["cell_n"],
                      d["bcell"])
 
-    def to_simulations(self, sims):
-        """Write the state back into the simulations the batch was made from: balls,
-        walls (positions, reactions), flat joints (state, the breakages since the last
-        call), clumps, and the contacts with their history as the CPU's Verlet lists.
-        Their step and time advance by the steps run since the last call."""
+    def to_simulations(self, sims, cases=None):
+        """Write the state back into the simulations the batch was made from (of
+        ``cases``, default all): balls, walls (positions, velocities, reactions), flat
+        joints (state, the breakages since the case's last export), clumps, and the
+        contacts with their history as the CPU's Verlet lists. Their step and time advance
+        by the steps they ran since their last export."""
         h = {k: v.copy_to_host() for k, v in self.d.items() if k in _EXPORTED}
         n_log = int(h["logn"][0])
         steps = h["clock"] - self._clock_exported       # each case's since the last call
-        for b, s in enumerate(sims):
+        for b in range(self.n_cases) if cases is None else cases:
+            s = sims[b]
             lo, hi = self._offsets[b], self._offsets[b + 1]
             s.balls.pos[:] = h["pos"][lo:hi]
             s.balls.vel[:] = h["vend"][lo:hi]
@@ -413,8 +415,8 @@ class Batch:
             _lists_to_cpu(h, s, lo, hi, w0)
             s.cnt[0] += steps[b]
             s.prm[P.TIME] = h["prm"][b, P.TIME]     # summed step by step, as on the CPU
-        self._log_exported = n_log
-        self._clock_exported = h["clock"]
+            self._log_exported[b] = n_log
+            self._clock_exported[b] = h["clock"][b]
         self.steps = 0
         return self
 
@@ -430,8 +432,8 @@ class Batch:
         bd.theta[:], bd.moment[:] = h["bsc"][0, q0:q1, 0], h["bsc"][0, q0:q1, 1]
         bd.state[:], bd.fn[:] = h["bstate"][0, q0:q1], h["bfn"][0, q0:q1]
         bd.fs[:], bd.active[:] = h["bfs"][0, q0:q1], h["bactive"][0, q0:q1]
-        li = h["logi"][self._log_exported:n_log]
-        lf = h["logf"][self._log_exported:n_log]
+        li = h["logi"][self._log_exported[b]:n_log]
+        lf = h["logf"][self._log_exported[b]:n_log]
         mine = (li[:, 1] >= q0) & (li[:, 1] < q1)
         li, lf = li[mine], lf[mine]
         order = np.lexsort((li[:, 2], li[:, 1], li[:, 0]))
