@@ -321,7 +321,7 @@ class Batch:
     def case_arrays(self, b, *names):
         """Host copies of the named per-ball arrays of case b."""
         lo, hi = self._offsets[b], self._offsets[b + 1]
-        return [self.d[n].copy_to_host()[lo:hi] for n in names]
+        return [self.d[n][lo:hi].copy_to_host() for n in names]
 
     def to_controls(self, cases=None):
         """Write the device's state of the controllers into the ``Control`` s the batch was
@@ -390,50 +390,70 @@ class Batch:
         ``cases``, default all): balls, walls (positions, velocities, reactions), flat
         joints (state, the breakages since the case's last export), clumps, and the
         contacts with their history as the CPU's Verlet lists. Their step and time advance
-        by the steps they ran since their last export."""
-        h = {k: v.copy_to_host() for k, v in self.d.items() if k in _EXPORTED}
-        n_log = int(h["logn"][0])
-        steps = h["clock"] - self._clock_exported       # each case's since the last call
+        by the steps they ran since their last export. Only each case's own rows cross
+        to the host (a halted case's export costs the same whatever B)."""
+        clock = self.d["clock"].copy_to_host()
+        n_log = int(self.d["logn"].copy_to_host()[0])
         for b in range(self.n_cases) if cases is None else cases:
-            s = sims[b]
-            lo, hi = self._offsets[b], self._offsets[b + 1]
-            s.balls.pos[:] = h["pos"][lo:hi]
-            s.balls.vel[:] = h["vend"][lo:hi]
-            s.balls.omega[:] = h["wend"][lo:hi]
-            s.balls.force[:] = h["force"][lo:hi, :2]
-            s.balls.moment[:] = h["force"][lo:hi, 2]
-            s.balls.minv[:] = h["minv"][lo:hi]        # density scaling's, if on
-            s.balls.iinv[:] = h["iinv"][lo:hi]
-            w0, w1 = self._wall_offsets[b], self._wall_offsets[b + 1]
+            s, h = sims[b], self._case_rows(b, n_log)
+            s.balls.pos[:] = h["pos"]
+            s.balls.vel[:] = h["vend"]
+            s.balls.omega[:] = h["wend"]
+            s.balls.force[:] = h["force"][:, :2]
+            s.balls.moment[:] = h["force"][:, 2]
+            s.balls.minv[:] = h["minv"]        # density scaling's, if on
+            s.balls.iinv[:] = h["iinv"]
             for name, key in (("seg", "seg"), ("centre", "centre"), ("force", "wforce"),
                               ("moment", "wmoment"), ("vel", "wvel")):    # (controllers)
-                getattr(s.walls, name)[:] = h[key][w0:w1]
-            c0, c1 = self._clump_offsets[b], self._clump_offsets[b + 1]
+                getattr(s.walls, name)[:] = h[key]
             for name in ("pos", "vel", "omega", "theta", "force", "moment", "held"):
-                getattr(s.clumps, name)[:] = h["c" + name][c0:c1]
-            self._bonds_to_cpu(h, s, b, n_log)
-            _lists_to_cpu(h, s, lo, hi, w0)
-            s.cnt[0] += steps[b]
-            s.prm[P.TIME] = h["prm"][b, P.TIME]     # summed step by step, as on the CPU
+                getattr(s.clumps, name)[:] = h["c" + name]
+            self._bonds_to_cpu(h, s, b)
+            _lists_to_cpu(h, s, self._offsets[b], self._wall_offsets[b])
+            s.cnt[0] += clock[b] - self._clock_exported[b]
+            s.prm[P.TIME] = h["prm"][P.TIME]        # summed step by step, as on the CPU
             self._log_exported[b] = n_log
-            self._clock_exported[b] = h["clock"][b]
+            self._clock_exported[b] = clock[b]
         self.steps = 0
         return self
 
-    def _bonds_to_cpu(self, h, sim, b, n_log):
-        """Case b's flat-joint state (side 0's copy) and its breakages logged since the
-        last export (in the CPU's order: step, bond, element) into ``sim``, before its
-        step advances."""
+    def _case_rows(self, b, n_log):
+        """Host copies of case b's rows of the device arrays (its balls', segments',
+        clumps' and flat joints' ranges, its list slots, the log since its last export)."""
+        d = self.d
+        lo, hi = self._offsets[b], self._offsets[b + 1]
+        w0, w1 = self._wall_offsets[b], self._wall_offsets[b + 1]
+        c0, c1 = self._clump_offsets[b], self._clump_offsets[b + 1]
+        q0, q1 = self._bond_offsets[b], self._bond_offsets[b + 1]
+        n = self.n_balls
+        h = {k: d[k][lo:hi].copy_to_host() for k in _BALL_ROWS}
+        h.update({k: d[k][w0:w1].copy_to_host() for k in _SEGMENT_ROWS})
+        h.update({k: d[k][c0:c1].copy_to_host() for k in _CLUMP_ROWS})
+        h.update({k: d[k][0, q0:q1].copy_to_host() for k in _BOND_ROWS if q1 > q0})
+        h["prm"] = d["prm"][b].copy_to_host()
+        for k, slots in (("nb", MAX_NEIGHBOURS), ("wl", MAX_WALLS)):     # slot-major
+            h[k] = np.array([d[k][q, lo:hi].copy_to_host() for q in range(slots)])
+        for k, slots in (("nh", MAX_NEIGHBOURS), ("wh", MAX_WALLS)):     # rows q n + i
+            h[k] = np.array([d[k][q * n + lo:q * n + hi].copy_to_host() for q in range(slots)])
+        k0 = self._log_exported[b]
+        h["logi"] = d["logi"][k0:n_log].copy_to_host() if n_log > k0 else np.zeros((0, 4), np.int64)
+        h["logf"] = d["logf"][k0:n_log].copy_to_host() if n_log > k0 else np.zeros((0, 3))
+        return h
+
+    def _bonds_to_cpu(self, h, sim, b):
+        """Case b's flat-joint state (side 0's copy, its rows ``h``) and its breakages
+        logged since its last export (in the CPU's order: step, bond, element) into
+        ``sim``, before its step advances."""
         bd = sim.bonds
         q0 = self._bond_offsets[b]
         q1 = q0 + len(bd)
         if q1 == q0:
             return
-        bd.theta[:], bd.moment[:] = h["bsc"][0, q0:q1, 0], h["bsc"][0, q0:q1, 1]
-        bd.state[:], bd.fn[:] = h["bstate"][0, q0:q1], h["bfn"][0, q0:q1]
-        bd.fs[:], bd.active[:] = h["bfs"][0, q0:q1], h["bactive"][0, q0:q1]
-        li = h["logi"][self._log_exported[b]:n_log]
-        lf = h["logf"][self._log_exported[b]:n_log]
+        bd.theta[:], bd.moment[:] = h["bsc"][:, 0], h["bsc"][:, 1]
+        bd.state[:], bd.fn[:] = h["bstate"], h["bfn"]
+        bd.fs[:], bd.active[:] = h["bfs"], h["bactive"]
+        li = h["logi"]
+        lf = h["logf"]
         mine = (li[:, 1] >= q0) & (li[:, 1] < q1)
         li, lf = li[mine], lf[mine]
         order = np.lexsort((li[:, 2], li[:, 1], li[:, 0]))
@@ -452,37 +472,36 @@ class Batch:
         log.n[0] = k0 + len(order)
 
 
-# the device arrays to_simulations reads (each copied to the host once per call)
-_EXPORTED = ("clock", "prm", "pos", "vend", "wend", "force", "minv", "iinv", "seg", "centre",
-             "wforce", "wmoment", "wvel", "cpos", "cheld", "cvel", "comega", "ctheta", "cforce",
-             "cmoment", "bsc", "bstate", "bfn", "bfs", "bactive", "logi", "logf", "logn", "nb",
-             "nbn", "nh", "wl", "wln", "wh")
+# the device arrays to_simulations reads, by the range of a case that indexes them
+_BALL_ROWS = ("pos", "vend", "wend", "force", "minv", "iinv", "nbn", "wln")
+_SEGMENT_ROWS = ("seg", "centre", "wforce", "wmoment", "wvel")
+_CLUMP_ROWS = ("cpos", "cheld", "cvel", "comega", "ctheta", "cforce", "cmoment")
+_BOND_ROWS = ("bsc", "bstate", "bfn", "bfs", "bactive")     # side 0's copy
 
 
-def _lists_to_cpu(h, sim, lo, hi, w0):
-    """The contacts of the case of balls lo..hi and their history as the CPU's Verlet
-    lists (i < j, grouped by i), which its next rebuild (flagged here) carries over."""
-    width = h["nh"].shape[1]
-    total = h["nbn"].shape[0]
-    slots = np.arange(MAX_NEIGHBOURS)
-    use = slots[None, :] < h["nbn"][lo:hi, None]
-    i = np.broadcast_to(np.arange(lo, hi)[:, None], use.shape)
-    j = h["nb"][:, lo:hi].T
+def _lists_to_cpu(h, sim, lo, w0):
+    """A case's contacts and their history (its rows ``h``: balls from global index lo,
+    segments from w0) as the CPU's Verlet lists (i < j, grouped by i), which its next
+    rebuild (flagged here) carries over."""
+    width = h["nh"].shape[2]
+    nball = h["nbn"].shape[0]
+    use = np.arange(MAX_NEIGHBOURS)[None, :] < h["nbn"][:, None]
+    i = np.broadcast_to(np.arange(nball)[:, None], use.shape)
+    j = h["nb"].T - lo
     keep = use & (j > i)
     n = int(keep.sum())
     pr = Pairs.empty(max(n, 1), width)
-    pr.i[:n] = i[keep] - lo
-    pr.j[:n] = j[keep] - lo
-    pr.hist[:n] = h["nh"][(slots[None, :] * total + i)[keep]]
+    pr.i[:n] = i[keep]
+    pr.j[:n] = j[keep]
+    pr.hist[:n] = h["nh"].transpose(1, 0, 2)[keep]
     pr.n[0] = n
-    wslots = np.arange(MAX_WALLS)
-    wuse = wslots[None, :] < h["wln"][lo:hi, None]
-    wi = np.broadcast_to(np.arange(lo, hi)[:, None], wuse.shape)
+    wuse = np.arange(MAX_WALLS)[None, :] < h["wln"][:, None]
+    wi = np.broadcast_to(np.arange(nball)[:, None], wuse.shape)
     m = int(wuse.sum())
     wp = WallPairs.empty(max(m, 1), width)
-    wp.i[:m] = wi[wuse] - lo
-    wp.s[:m] = h["wl"][:, lo:hi].T[wuse] - w0
-    wp.hist[:m] = h["wh"][(wslots[None, :] * total + wi)[wuse]]
+    wp.i[:m] = wi[wuse]
+    wp.s[:m] = h["wl"].T[wuse] - w0
+    wp.hist[:m] = h["wh"].transpose(1, 0, 2)[wuse]
     wp.n[0] = m
     sim.pairs, sim.wpairs = pr, wp
     sim.cnt[2] = 1       # rebuilt (history carried) before the next CPU step
