@@ -23,7 +23,7 @@ Needs a CUDA GPU and numba-cuda (``pip install -e '.[cuda]'``); prints one line 
    of B independent cases, which is what the throughput counts.
    For B = 1, 100 and 1000, 100 more steps with each kernel timed alone (device
    synchronised before and after it): where the step's time goes.
-5. What the GPU backend cannot run yet (biaxial and box rigs), printed as not measured.
+5. Where the rigs' figures come from: bench/gpu_rigs.py (the rigs' cycles on the batch).
 
 The last line is a table. A script that prints numbers, never a test.
 """
@@ -175,8 +175,8 @@ def main():
     cpu_bsps = cpu["bsps"] if cpu else float("nan")
     print(f"cpu_engine_one_case_ball_steps_per_s={cpu_bsps:.3g} (n={a.n}, {a.cpu_steps} steps, "
           f"one thread)")
-    print("not measured: 100 full-size biaxial specimens and the 160 thesis box cases "
-          "(the GPU batch holds no controllers yet)")
+    print("rigs on the batch: bench/gpu_rigs.py (100 full-size biaxial specimens' real-time "
+          "cycles; --rig box --batch 160 --config config/thesis.yaml: the study's box cases)")
     print("| B | balls | steps | s | ball-steps/s | x CPU one case |")
     print("|---|---|---|---|---|---|")
     for nb, n, steps, t, bsps in rows:

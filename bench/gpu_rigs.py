@@ -1,0 +1,164 @@
+"""Batched GPU engine on the rigs: B cases' cycles as one batch (rig/batched.py), beside
+one case's on the CPU engine in the same run.
+
+    python bench/gpu_rigs.py [--batch 100] [--width 0.3 --height 0.6] [--cycles 2]
+        [--frequency 20] [--deviator-max 80] [--first-loading-inertial-number 1.35e-4]
+        [--check-every 1000] [--config config/config.yaml] [--library BPM.nc]
+    python bench/gpu_rigs.py --rig box --batch 160 --config config/thesis.yaml --cycles 5
+
+Biaxial (default): one specimen of box_test's library at the config's resolution
+(bench/case_benchmark.py builds and caches the library), assembled on the CPU (seed 1) and
+copied B times. Every copy
+consolidates and loads first (cycle 0) at --first-loading-inertial-number (default the
+tests' fast rate, tests/biaxial_fast.py: the config's physics-bound 1.5e-5 takes ten times
+the steps, and the cycles' cost does not depend on it), then runs --cycles real-time cycles
+at --frequency between the config's q_min and --deviator-max (below the small specimens'
+strength). Prints the wall time of cycle 0 and of the cycles on the batch, the engine runs
+per case and cycle (each a halt the host reacts to), the axial strain after each cycle of
+copy 0, ``gpu_batch_minutes_per_1000_cycles=`` (the whole batch) and the same for one copy
+on the CPU engine (one thread, a subprocess running beside the GPU part:
+``cpu_one_case_minutes_per_1000_cycles=``). Needs a CUDA GPU (NUMBA_ENABLE_CUDASIM=1: a dry
+run, with tiny settings). ``--rig box``: the box test's case 0 of box_test at the config's
+resolution (thesis.yaml: the thesis-scale study's) copied B times, its static loads and
+cycle 0, then --cycles cycles (the study's 160 cases x 1000 cycles: minutes per 1000
+cycles of B = 160). Never a test.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+
+def arguments(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rig", choices=["biaxial", "box"], default="biaxial")
+    ap.add_argument("--batch", type=int, default=100)
+    ap.add_argument("--width", type=float, default=0.3)
+    ap.add_argument("--height", type=float, default=0.6)
+    ap.add_argument("--cycles", type=int, default=2)
+    ap.add_argument("--frequency", type=float, default=20.0)
+    ap.add_argument("--deviator-max", type=float, default=80.0, metavar="KPA")
+    ap.add_argument("--first-loading-inertial-number", type=float, default=1.35e-4)
+    ap.add_argument("--check-every", type=int, default=1000)
+    ap.add_argument("--config", default="config/config.yaml")
+    ap.add_argument("--library", help="a BPM.nc (default: box_test's, built once)")
+    ap.add_argument("--specimen", help=argparse.SUPPRESS)      # the CPU child's
+    return ap.parse_args(argv)
+
+
+def assembled(a):
+    from case_benchmark import box_test_library
+
+    from ballaststudy.config import load_config
+    from ballaststudy.rig.assembly import assemble
+    from ballaststudy.rig.biaxial import assemble_biaxial
+    from ballaststudy.rig.kinds import params_from_config
+    from ballaststudy.rig.library import load_library
+    params = params_from_config(a.rig, load_config(a.config).get("rig", {}))
+    lib = load_library(a.library or box_test_library(a.config))
+    t = time.perf_counter()
+    if a.rig == "box":
+        rig = assemble(lib, params, seed=1)
+    else:
+        params.width_m, params.height_m = a.width, a.height
+        rig = assemble_biaxial(lib, params, seed=1)
+    path = Path(tempfile.mkdtemp()) / "assembled.nc"
+    rig.save(path)
+    print(f"assembled on the CPU in {time.perf_counter() - t:.0f} s: "
+          f"{int(rig.sim.balls.alive.sum())} balls, {rig.layout.bonds_installed} bonds", flush=True)
+    return path
+
+
+def copies(path, a, n):
+    """n runs of the case at path (biaxial: real time), cycle 0 plus --cycles; each counts
+    its engine runs (``run.engine_runs``)."""
+    from ballaststudy.rig.kinds import rig_classes
+    rig_class, run_class, _ = rig_classes(a.rig)
+    out = []
+    for _ in range(n):
+        rig = rig_class.load(path)
+        p = rig.params
+        if a.rig == "biaxial":
+            p.mode, p.frequency_Hz, p.deviator_max_kPa = "real_time", a.frequency, a.deviator_max
+            p.first_loading_inertial_number = a.first_loading_inertial_number
+        run = run_class(rig, cycles=1 + a.cycles)
+        run.engine_runs = 0
+        advance = run.advance
+
+        def counted(max_steps=None, run=run, advance=advance):
+            run.engine_runs += 1
+            return advance(max_steps)
+        run.advance = counted
+        out.append(run)
+    return out
+
+
+def timed(runs, drive):
+    """(s to the end of cycle 0, s of the cycles after it, engine runs in those)."""
+    t0 = time.perf_counter()
+    drive(runs, lambda r: r.run(stop_after=1))
+    t1 = time.perf_counter()
+    before = sum(r.engine_runs for r in runs)
+    drive(runs, lambda r: r.run())
+    return t1 - t0, time.perf_counter() - t1, sum(r.engine_runs for r in runs) - before
+
+
+def one_by_one(runs, job):
+    for r in runs:
+        job(r)
+
+
+def report(label, runs, a, t0, tc, engine_runs):
+    done = min(len(r.s.rows) for r in runs) - 1          # cycles after cycle 0
+    failed = [r.s.failure for r in runs if getattr(r.s, "failure", None)]
+    print(f"[{label}] B={len(runs)}: cycle 0 {t0:.1f} s; {done} cycles {tc:.1f} s; "
+          f"engine runs per case and cycle {engine_runs / max(len(runs) * done, 1):.0f}; "
+          f"failed {len(failed)}{': ' + failed[0] if failed else ''}", flush=True)
+    key = "axial_strain" if a.rig == "biaxial" else "settlement"
+    print(f"[{label}] copy 0 {key} after each cycle: "
+          f"{[round(r.get(key, float('nan')), 5) for r in runs[0].s.rows]}", flush=True)
+    return tc / done * 1000 / 60 if done > 0 else float("nan")
+
+
+def main(argv=None):
+    a = arguments(argv)
+    if a.specimen:                     # the CPU child: one copy on the CPU engine
+        runs = copies(a.specimen, a, 1)
+        per = report("cpu", runs, a, *timed(runs, one_by_one))
+        print("CPU_RESULT " + json.dumps(dict(minutes=per)), flush=True)
+        return 0
+    from ballaststudy.dem.gpu import cuda_available
+    from ballaststudy.rig.batched import run_batched
+    if not cuda_available():
+        print("gpu_rigs.py: no CUDA GPU visible to numba", file=sys.stderr)
+        return 2
+    path = assembled(a)
+    env = dict(os.environ, NUMBA_NUM_THREADS="1")
+    env.pop("NUMBA_ENABLE_CUDASIM", None)
+    child = subprocess.Popen([sys.executable, __file__, *(argv or sys.argv[1:]), "--specimen",
+                              str(path)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                             text=True, env=env)
+    runs = copies(path, a, a.batch)
+    gpu = report("gpu", runs, a, *timed(runs, lambda rs, job: run_batched(
+        rs, job, check_every=a.check_every)))
+    out, _ = child.communicate()
+    print("\n".join(line for line in out.splitlines() if not line.startswith("CPU_RESULT")))
+    cpu = next((json.loads(line.split(" ", 1)[1])["minutes"] for line in out.splitlines()
+                if line.startswith("CPU_RESULT")), float("nan"))
+    what = (f"{a.width:g} x {a.height:g} m, {a.frequency:g} Hz" if a.rig == "biaxial"
+            else a.config)
+    print(f"gpu_batch_minutes_per_1000_cycles={gpu:.2f} ({a.rig}, B={a.batch}, {what})")
+    print(f"cpu_one_case_minutes_per_1000_cycles={cpu:.2f} (one thread); the batch does "
+          f"{a.batch * cpu / gpu:.1f} x the CPU's case-cycles per hour")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
