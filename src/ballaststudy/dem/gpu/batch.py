@@ -19,13 +19,12 @@ What the batch holds today: balls (free or with held velocities, local damping, 
 loads), kinematic wall segments (constant velocity and spin), every contact law of
 ``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU), flat joints
 (failure, breakage log, interface removal; kernels.flat_joint), clumps (free or held),
-density scaling at a fixed dt (kernels.scale_masses, at every rebuild of a case),
+density scaling at a fixed dt and the automatic dt (kernels.ball_springs, at every rebuild
+of a case),
 controllers (every sensor, actuator and controller of control.py, driven bodies
 included: the CPU's own functions per case, kernels.case_control). Checkpoints go through
 the CPU: ``to_simulations`` then ``Simulation.save_checkpoint`` (and the rig's
-``Control.to_dict``). Not yet: the automatic dt (a simulation that uses it is refused,
-``BatchError``, never run differently), and the energy accounts (the batch books no
-dissipated work).
+``Control.to_dict``). Not yet: the energy accounts (the batch books no dissipated work).
 """
 import time
 
@@ -61,14 +60,8 @@ def cuda_available():
 
 
 def _check(sim, k):
-    p = sim.prm
-    why = []
-    if p[P.AUTO_DT] > 0.0:
-        why.append("automatic dt (give the Simulation a fixed dt)")
-    if p[P.DT] <= 0.0:
-        why.append("no dt")
-    if why:
-        raise BatchError(f"case {k}: the GPU batch does not hold {', '.join(why)} yet")
+    if sim.prm[P.DT] <= 0.0:
+        raise BatchError(f"case {k}: no dt (prepare the Simulation)")
 
 
 class _Prepared:
@@ -110,7 +103,6 @@ class Batch:
         self._started = []            # cases started since the last advance
         self._controls = host.pop("controls")
         self._control_dims = host["cdim"].copy()
-        self._timestep = host["prm"][:, [P.DT, P.DSCALE, P.DT_SAFETY]].copy()
         self._offsets = host.pop("offsets")
         self._wall_offsets = np.concatenate([host["wlo"], host["whi"][-1:]])
         self._bond_offsets = host.pop("bond_offsets")
@@ -118,13 +110,15 @@ class Batch:
         self.n_clumps = host["cpos"].shape[0]
         host["cell_n"] = np.zeros(grid_cells, np.int32)
         host["cell_ids"] = np.full((grid_cells, max_cell), -1, np.int32)
-        self.scaled = bool(np.any(host["cfg"][:, K.SCALE2] > 0.0))   # density scaling
+        self.springs = bool(np.any(host["cfg"][:, K.SCALE2] > 0.0)       # density scaling
+                            or np.any(host["cfg"][:, K.AUTO] > 0.0))     # or automatic dt
         self.d = {k: cuda.to_device(v) for k, v in host.items()}
         self.k = K.kernels(law)
         self.timer = None
         self.prepared = {}            # kernel name -> _Prepared (or None: ordinary launches)
         self._build_lists()           # every case: the lists before the first forces
-        self._scale_masses()
+        self._ball_springs()          # (the dt: prepare()'s, from the same lists)
+        self.d["dtc"].copy_to_device(np.full(n_cases, K.NO_DT))
         self._launch("unbin", self.n_balls, self.d["alive"], self.d["case"], self.d["need"],
                       self.d["cell_n"], self.d["bcell"])
 
@@ -181,16 +175,17 @@ class Batch:
                      d["bl"], d["bln"], d["bij"], d["bactive"], d["relist"], d["clump"],
                      d["err"])
 
-    def _scale_masses(self):
-        """Density scaling's inertial masses of the rebuilt cases (if any case scales)."""
-        if not self.scaled:
+    def _ball_springs(self):
+        """Density scaling's inertial masses and the automatic dt's dt_crit of the rebuilt
+        cases (if any case has either)."""
+        if not self.springs:
             return
         d = self.d
-        self._launch("scale_masses", self.n_balls, d["pos0"], d["rad"], d["mass"],
+        self._launch("ball_springs", self.n_balls, d["pos0"], d["rad"], d["mass"],
                      d["inertia"], d["minv"], d["iinv"], d["mat"], d["alive"], d["case"],
                      d["cfg"], d["coef"], d["nb"], d["nbn"], d["wl"], d["wln"], d["wmat"],
                      d["bl"], d["bln"], d["bij"], d["bc"], d["bactive"], d["clump"],
-                     d["need"])
+                     d["need"], d["dtc"])
 
     def start(self, cases, n_steps, sims=None):
         """Give the (halted) ``cases`` ``n_steps`` more steps each; a case's controllers, as
@@ -273,7 +268,7 @@ class Batch:
                      d["alive"], d["pos"], d["vel"], d["omega"], d["pos0"], d["travel"],
                      d["need"], d["halt"])
         self._build_lists()
-        self._scale_masses()
+        self._ball_springs()
         self._launch("forces", nb, d["pos"], d["vel"], d["omega"], d["vend"], d["wend"],
                      d["rad"], d["mass"], d["minv"], d["iinv"], d["fix"], d["damp"],
                      d["mat"], d["alive"], d["case"], d["fext"], d["force"], d["cfg"],
@@ -289,7 +284,7 @@ class Batch:
                      d["offset"], d["alive"], d["pos"], d["force"], d["vend"], d["wend"],
                      d["err"], d["halt"])
         self._launch("cases_step", self.n_cases, d["halt"], d["left"], d["clock"], d["step0"],
-                     *self._control_args())
+                     d["cfg"], d["dtc"], *self._control_args())
         self.steps += 1
 
     def _control_args(self):
@@ -348,31 +343,38 @@ class Batch:
                 self.d[key][b, :len(row)] = row
 
     def _push_timestep(self, b, sim):
-        """Case b's dt and density scaling from its simulation, if its host changed them
-        (a rig scales its masses for loading): the new dt from the next step on, the case
-        rebuilt and its inertial masses raised now, as on the CPU."""
+        """Case b's dt, density scaling and automatic dt from its simulation, if its host
+        changed them (a rig scales its masses for loading): the case rebuilt now with its
+        inertial masses (the real ones back if scaling ended) and, with the automatic dt,
+        its dt from that rebuild, as Simulation.prepare does before the next step."""
         p = sim.prm
         _check(sim, b)
-        old = self._timestep[b]
-        new = (p[P.DT], p[P.DSCALE], p[P.DT_SAFETY])
-        if new == tuple(old):
+        keys = [P.DT, P.DSCALE, P.DT_SAFETY, P.AUTO_DT]
+        prm = self.d["prm"][b].copy_to_host()
+        if np.array_equal(prm[keys], p[keys]):
             return
-        if old[1] > 0.0 and p[P.DSCALE] == 0.0:
-            raise BatchError(f"case {b}: density scaling switched off (not held yet)")
-        cfg = self.d["cfg"].copy_to_host()[b]
-        cfg[K.DT] = p[P.DT]
+        lo, hi = self._offsets[b], self._offsets[b + 1]
+        if p[P.DSCALE] == 0.0 and prm[P.DSCALE] > 0.0:      # set_density_scaling(None)
+            self.d["minv"][lo:hi] = np.ascontiguousarray(sim.balls.minv)
+            self.d["iinv"][lo:hi] = np.ascontiguousarray(sim.balls.iinv)
+        prm[keys] = p[keys]
+        cfg = self.d["cfg"][b].copy_to_host()
+        cfg[[K.DT, K.SAFETY, K.AUTO]] = p[P.DT], p[P.DT_SAFETY], p[P.AUTO_DT]
         cfg[K.SCALE2] = (p[P.DT] / p[P.DT_SAFETY]) ** 2 if p[P.DSCALE] > 0.0 else 0.0
-        self.d["cfg"][b, :] = cfg
-        prm = self.d["prm"].copy_to_host()[b]
-        prm[[P.DT, P.DSCALE, P.DT_SAFETY]] = new
-        self.d["prm"][b, :] = prm
-        self._timestep[b] = new
-        self.scaled = self.scaled or cfg[K.SCALE2] > 0.0
+        self.springs = self.springs or cfg[K.SCALE2] > 0.0 or cfg[K.AUTO] > 0.0
         need = np.zeros(self.n_cases, np.int32)     # (the other cases' builds are done)
         need[b] = 1
         self.d["need"].copy_to_device(need)
-        self._build_lists()         # now, as Simulation.prepare does before the next step:
-        self._scale_masses()        # its first half kick already on the new masses
+        self.d["cfg"][b, :] = cfg
+        self._build_lists()
+        self._ball_springs()
+        dtc = self.d["dtc"].copy_to_host()
+        if cfg[K.AUTO] > 0.0 and dtc[b] < K.NO_DT:
+            cfg[K.DT] = prm[P.DT] = p[P.DT_SAFETY] * dtc[b]
+            self.d["cfg"][b, :] = cfg
+        dtc[b] = K.NO_DT
+        self.d["dtc"].copy_to_device(dtc)
+        self.d["prm"][b, :] = prm
         d = self.d
         self._launch("unbin", self.n_balls, d["alive"], d["case"], d["need"], d["cell_n"],
                      d["bcell"])
@@ -404,6 +406,7 @@ class Batch:
             lists_to_cpu(h, s, self._offsets[b], self._wall_offsets[b])
             s.cnt[0] += clock[b] - self._clock_exported[b]
             s.prm[P.TIME] = h["prm"][P.TIME]        # summed step by step, as on the CPU
+            s.prm[P.DT] = h["prm"][P.DT]            # (the automatic dt's)
             self._log_exported[b] = n_log
             self._clock_exported[b] = clock[b]
         self.steps = 0

@@ -27,13 +27,15 @@ each costs microseconds of the host even when prepared (batch._Prepared):
   clumps_first (clump; only if there are clumps): half kick, drift, pebbles placed and
       checked like free balls
   bin, build (ball; flagged cases only): cell list, Verlet rows carrying history
-  scale_masses (ball; flagged cases with density scaling only): inertial masses raised
-      so that the case's dt is stable over the new rows (integrate.critical_dt)
+  ball_springs (ball; flagged cases with density scaling or the automatic dt): inertial
+      masses raised so that the case's dt is stable over the new rows, the case's dt_crit
+      (integrate.critical_dt)
   forces (ball): empty the cells of a rebuilt case, contacts, walls, flat joints, weight
       and load, local damping, half kick, guards (a pebble keeps its raw force)
   clumps_second (clump): pebble forces gathered, damping, half kick, pebble velocities
-  cases_step (case): time, controllers (case_control: the CPU's control_step on the case's
-      rows), budget; an event or a spent budget halts the case
+  cases_step (case): time, the automatic dt for the next step, controllers (case_control:
+      the CPU's control_step on the case's rows), budget; an event or a spent budget halts
+      the case
 Every kernel skips the balls, segments and clumps of a halted case (``halt``), so a case
 waits unchanged until its host resumes it (cases_resume first imposes the velocities an
 event left pending, as a CPU run does at its start).
@@ -58,8 +60,9 @@ from ..walls import wall_contact_point
 
 # per-case scalar columns (``cfg``) and error bits (``err``); SCALE2: density scaling's
 # (dt / safety)^2, 0 when the case runs on its real masses
-DT, GX, GY, THICK, SKIN, VMAX2, X0, Y0, X1, Y1, CELL, SCALE2 = range(12)
-NCFG = 12
+DT, GX, GY, THICK, SKIN, VMAX2, X0, Y0, X1, Y1, CELL, SCALE2, AUTO, SAFETY = range(14)
+NCFG = 14               # AUTO: 1 if the case's dt follows its contacts (the CPU's automatic
+NO_DT = 1.0e30          # dt: safety x dt_crit after each rebuild); NO_DT: none found yet
 # flat-joint constants (rows of ``bc``) and per-side state columns (``bsc``); the
 # breakage log: ``logi`` (step, bond, element, mode), ``logf`` (x, y, stress)
 RBAR, D0, GI, KN, KS, SIGC, COH, TANPHI, MU = range(9)
@@ -337,16 +340,23 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
         return kn + ks, ks * rad[i] * rad[i] + kr
 
     @cuda.jit
-    def scale_masses(pos0, rad, mass, inertia, minv, iinv, mat, alive, case, cfg, coef, nb,
-                     nbn, wl, wln, wmat, bl, bln, bij, bc, bactive, clump, need):
-        """Density scaling as integrate.critical_dt does it at a rebuild: k_tr and k_rot
-        of the ball over its new rows (the full list: its own contacts), its walls and its
-        flat joints (a jointed pair within the skin counts its contact springs too, as
-        the list leaves it out), then 1/m = 1/max(m, k_tr s2), 1/I likewise; free balls
-        with springs only. Summed in another order than the CPU's half list: round-off."""
+    def ball_springs(pos0, rad, mass, inertia, minv, iinv, mat, alive, case, cfg, coef, nb,
+                     nbn, wl, wln, wmat, bl, bln, bij, bc, bactive, clump, need, dtc):
+        """integrate.critical_dt at a rebuild: k_tr and k_rot of the ball over its new rows
+        (the full list: its own contacts), its walls and its flat joints (a jointed pair
+        within the skin counts its contact springs too, as the list leaves it out); with
+        density scaling 1/m = 1/max(m, k_tr s2), 1/I likewise (free balls with springs
+        only); with the automatic dt the case's dt_crit, the least over its balls (clumps'
+        pebbles too) of sqrt(m/k_tr) and sqrt(I/k_rot), into dtc. Summed in another order
+        than the CPU's half list: round-off."""
         i = cuda.grid(1)
         b = rebuilding(i, alive, case, need)
-        if b < 0 or cfg[b, SCALE2] == 0.0 or clump[i] >= 0:
+        if b < 0:
+            return
+        auto = cfg[b, AUTO] > 0.0
+        s2 = cfg[b, SCALE2]
+        pebble = clump[i] >= 0
+        if not auto and (s2 == 0.0 or pebble):
             return
         t = cfg[b, THICK]
         skin = cfg[b, SKIN]
@@ -371,7 +381,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             dx = pos0[j, 0] - pos0[i, 0]
             dy = pos0[j, 1] - pos0[i, 1]
             cut = ri + rad[j] + skin
-            if dx * dx + dy * dy < cut * cut:    # (i is free: never i's own clump)
+            if dx * dx + dy * dy < cut * cut:    # (never i's own clump: not jointed)
                 k_tr, k_rot = pair_springs(coef, mat, rad, b, i, j, t)
                 ktr += k_tr
                 krot += k_rot
@@ -380,9 +390,14 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             krot += bc[KN, q] * t * (2.0 * bc[RBAR, q]) ** 3 / 12.0 + bc[KS, q] * a * ri * ri
         if ktr == 0.0:
             return
-        s2 = cfg[b, SCALE2]
-        minv[i] = 1.0 / max(mass[i], ktr * s2)
-        iinv[i] = 1.0 / max(inertia[i], krot * s2)
+        if s2 > 0.0 and not pebble:
+            minv[i] = 1.0 / max(mass[i], ktr * s2)
+            iinv[i] = 1.0 / max(inertia[i], krot * s2)
+        if auto:
+            d = math.sqrt(1.0 / (minv[i] * ktr))
+            if krot > 0.0:
+                d = min(d, math.sqrt(1.0 / (iinv[i] * krot)))
+            cuda.atomic.min(dtc, b, d)
 
     @cuda.jit
     def unbin(alive, case, need, cell_n, bcell):
@@ -681,16 +696,21 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                 cuda.atomic.or_(err, b, ERR_GUARD)
 
     @cuda.jit
-    def cases_step(halt, left, clock, step0, prm, cpos, cvel, comega, cforce, cmass, cheld,
-                   seg, wforce, wvel, ccfg, csens, cmemb, cscale, cact, cctl, ccpar, ccst,
-                   cval, cwsum, csamp, cdim):
+    def cases_step(halt, left, clock, step0, cfg, dtc, prm, cpos, cvel, comega, cforce, cmass,
+                   cheld, seg, wforce, wvel, ccfg, csens, cmemb, cscale, cact, cctl, ccpar,
+                   ccst, cval, cwsum, csamp, cdim):
         """The end of a step, per running case (the CPU's order: engine.run_steps): its time
-        advances, its controllers run (an event halts it), its budget counts down (halted
-        when spent)."""
+        advances, its automatic dt takes this step's rebuild's dt_crit, its controllers run
+        (an event halts it), its budget counts down (halted when spent)."""
         b = cuda.grid(1)
         if b >= halt.shape[0] or halt[b] != RUNNING:
             return
         prm[b, P.TIME] += prm[b, P.DT]
+        if dtc[b] < NO_DT:
+            if cfg[b, AUTO] > 0.0:
+                cfg[b, DT] = cfg[b, SAFETY] * dtc[b]
+                prm[b, P.DT] = cfg[b, DT]
+            dtc[b] = NO_DT
         if ccfg[b, EVERY] > 0 and case_control(
                 b, prm, step0[b] + clock[b], False, cpos, cvel, comega, cforce, cmass, cheld,
                 seg, wforce, wvel, ccfg, csens, cmemb, cscale, cact, cctl, ccpar, ccst, cval,
@@ -712,5 +732,5 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
                          cwsum, csamp, cdim)
 
     return dict(walls_step=walls_step, first_half=first_half, bin=bin_balls, build=build,
-                scale_masses=scale_masses, unbin=unbin, forces=forces, clumps_first=clumps_first,
+                ball_springs=ball_springs, unbin=unbin, forces=forces, clumps_first=clumps_first,
                 clumps_second=clumps_second, cases_step=cases_step, cases_resume=cases_resume)

@@ -119,6 +119,7 @@ def pack(sims, controls):
     h["prm"] = np.array([s.prm for s in sims])        # time and what the controllers read
     h["halt"] = np.full(len(sims), K.HALT_STEPS, np.int32)
     h["left"] = np.zeros(len(sims), np.int64)
+    h["dtc"] = np.full(len(sims), K.NO_DT)       # a rebuild's dt_crit (kernels.ball_springs)
     _pack_bonds(sims, offsets, h)
     _pack_clumps(sims, offsets, h)
     _pack_controls(controls, woff, h["clump_offsets"], h)
@@ -269,7 +270,7 @@ def _grids(sims):
         ncy = max(1, int(math.ceil((y1 - y0) / cs)))
         scale2 = (p[P.DT] / p[P.DT_SAFETY]) ** 2 if p[P.DSCALE] > 0.0 else 0.0
         cfg[b] = (p[P.DT], p[P.GX], p[P.GY], p[P.THICK], p[P.SKIN], p[P.VMAX] ** 2,
-                  x0, y0, x1, y1, cs, scale2)
+                  x0, y0, x1, y1, cs, scale2, p[P.AUTO_DT], p[P.DT_SAFETY])
         grid[b] = (ncx, ncy, start)
         start += ncx * ncy
         # the most disks of radius rmin whose centres fit one cell (a square lattice
