@@ -3,7 +3,7 @@ one case's on the CPU engine in the same run.
 
     python bench/gpu_rigs.py [--batch 100] [--width 0.3 --height 0.6] [--cycles 2]
         [--frequency 20] [--deviator-max 80] [--first-loading-inertial-number 1.35e-4]
-        [--check-every 1000] [--config config/config.yaml] [--library BPM.nc]
+        [--check-every 100] [--config config/config.yaml] [--library BPM.nc]
     python bench/gpu_rigs.py --rig box --batch 160 --config config/thesis.yaml --cycles 5
 
 Biaxial (default): one specimen of box_test's library at the config's resolution
@@ -46,7 +46,7 @@ def arguments(argv=None):
     ap.add_argument("--frequency", type=float, default=20.0)
     ap.add_argument("--deviator-max", type=float, default=80.0, metavar="KPA")
     ap.add_argument("--first-loading-inertial-number", type=float, default=1.35e-4)
-    ap.add_argument("--check-every", type=int, default=1000)
+    ap.add_argument("--check-every", type=int, default=100)
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--library", help="a BPM.nc (default: box_test's, built once)")
     ap.add_argument("--specimen", help=argparse.SUPPRESS)      # the CPU child's
