@@ -1,10 +1,18 @@
 """Shared fixtures: database definitions like config/databases.yaml and one small generated
-form database reused by several test files (generated once per session)."""
+form database reused by several test files (generated once per session).
 
+The GPU batch (dem/gpu) runs here under numba's CUDA simulator (CI has no GPU): it is
+switched on before anything imports numba.cuda, which the package does wherever the
+scenario runner is imported (its cuda backend), so here, before any test module."""
 import copy
+import os
 
+import numba
 import pytest
 import xarray as xr
+
+os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+numba.config.reload_config()
 
 MATERIALS = {"hard": {"mass_fraction": 0.7, "density_kg_m3": 2850.0},
              "soft": {"mass_fraction": 0.3, "density_kg_m3": 2620.0}}

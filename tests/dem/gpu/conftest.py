@@ -1,14 +1,8 @@
-"""The GPU batch's kernels run here under numba's CUDA simulator (CI has no GPU): it must
-be switched on before numba.cuda is first imported, which only these tests do."""
-import os
-
-import numba
+"""The GPU batch's tests: its kernels under numba's CUDA simulator (switched on by
+tests/conftest.py), on settled beds of disks (beds.py)."""
 import pytest
 
-os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
-numba.config.reload_config()
-
-from .beds import bed  # noqa: E402 (after the simulator is on)
+from .beds import bed
 
 
 @pytest.fixture(scope="module")
