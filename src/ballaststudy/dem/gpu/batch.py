@@ -5,8 +5,8 @@ segments, contact table, gravity, dt) and their controllers (``control.Control``
 into one set of device arrays: the balls of all cases end to end with a case index, each
 case with its own dt, gravity, domain, cell grid, walls, contact coefficients, time, step
 and controllers. ``run(n)`` advances every case n steps (a few kernel launches per step,
-kernels.py), or to its first event; ``to_simulations(sims)`` and ``to_controls(controls)``
-write the state back.
+kernels.py), or to its first event; ``to_simulations(sims)`` and ``to_controls()`` write
+the state back (into the simulations and the Control objects).
 
 Each case steps on its own budget: ``start(cases, n)`` gives halted cases n more steps,
 ``advance()`` steps until some case halts (its budget spent, or an event of its
@@ -20,10 +20,9 @@ loads), kinematic wall segments (constant velocity and spin), every contact law 
 ``ContactLaw`` (its sub-models are the CPU engine's, compiled for the GPU), flat joints
 (failure, breakage log, interface removal; kernels.flat_joint), clumps (free or held),
 density scaling at a fixed dt and the automatic dt (kernels.ball_springs, at every rebuild
-of a case),
-controllers (every sensor, actuator and controller of control.py, driven bodies
-included: the CPU's own functions per case, kernels.case_control). Checkpoints go through
-the CPU: ``to_simulations`` then ``Simulation.save_checkpoint`` (and the rig's
+of a case), controllers (every sensor, actuator and controller of control.py, driven
+bodies included: the CPU's own functions per case, kernels.case_control). Checkpoints go
+through the CPU: ``to_simulations`` then ``Simulation.save_checkpoint`` (and the rig's
 ``Control.to_dict``). Not yet: the energy accounts (the batch books no dissipated work).
 """
 import time
