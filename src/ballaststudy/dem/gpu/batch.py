@@ -111,7 +111,12 @@ class Batch:
         host["cell_ids"] = np.full((grid_cells, max_cell), -1, np.int32)
         self.springs = bool(np.any(host["cfg"][:, K.SCALE2] > 0.0)       # density scaling
                             or np.any(host["cfg"][:, K.AUTO] > 0.0))     # or automatic dt
-        self.d = {k: cuda.to_device(v) for k, v in host.items()}
+        self.d = d = {k: cuda.to_device(v) for k, v in host.items()}
+        # the controllers' arguments of cases_step and cases_resume, built once (the device
+        # arrays are never reallocated; a tuple per step is Python in the hot loop)
+        self._control_args = (d["prm"], d["cpos"], d["cvel"], d["comega"], d["cforce"],
+                              d["cmass"], d["cheld"], d["seg"], d["wforce"], d["wvel"],
+                              *(d[k] for k in CONTROL_ARRAYS), d["cdim"])
         self.k = K.kernels(law)
         self.timer = None
         self.prepared = {}            # kernel name -> _Prepared (or None: ordinary launches)
@@ -221,7 +226,7 @@ class Batch:
         d = self.d
         if self._started:
             self._started = []
-            self._launch("cases_resume", self.n_cases, d["halt"], *self._control_args())
+            self._launch("cases_resume", self.n_cases, d["halt"], *self._control_args)
         halted = {}
         while not halted:
             running = self._remaining > 0
@@ -283,14 +288,8 @@ class Batch:
                      d["offset"], d["alive"], d["pos"], d["force"], d["vend"], d["wend"],
                      d["err"], d["halt"])
         self._launch("cases_step", self.n_cases, d["halt"], d["left"], d["clock"], d["step0"],
-                     d["cfg"], d["dtc"], *self._control_args())
+                     d["cfg"], d["dtc"], *self._control_args)
         self.steps += 1
-
-    def _control_args(self):
-        d = self.d
-        return (d["prm"], d["cpos"], d["cvel"], d["comega"], d["cforce"], d["cmass"],
-                d["cheld"], d["seg"], d["wforce"], d["wvel"]) + tuple(
-                    d[k] for k in CONTROL_ARRAYS) + (d["cdim"],)
 
     def _raise_errors(self):
         err = self.d["err"].copy_to_host()
