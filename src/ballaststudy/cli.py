@@ -23,6 +23,7 @@ from .provenance.store import lineage, load_records, verify, write_store
 from .bpm.cli import register as register_bpm
 from .calibration.cli import check_targets, register as register_calibrate
 from .loop.cli import register as register_loop
+from .loop.horizon_cli import register as register_horizon
 from .measured.cli import register as register_measured
 from .measured.importer import load_conditions
 from .scenario.cli import register as register_case
@@ -176,6 +177,7 @@ def build_parser():
     register_measured(sub)
     register_calibrate(sub)
     register_loop(sub)
+    register_horizon(sub)
 
     c = sub.add_parser("config", help="configuration")
     cs = c.add_subparsers(dest="action", required=True)

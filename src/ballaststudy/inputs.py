@@ -52,6 +52,8 @@ KINDS = {
     "study": Kind("a study.nc", "ballaststudy study aggregate", dims=("database", "case", "cycle")),
     "measured": Kind("a measured test", "ballaststudy measured import", dims=("cycle",),
                      attrs=("conditions_file",)),
+    "horizon": Kind("a long-term horizon table", "ballaststudy horizon",
+                    ("median_abs_error", "stated_abs_error", "chosen_law"), dims=("law", "fit_cycles")),
     "forms": Kind("a form database", "ballaststudy forms generate", ("a", "b", "c", "mass")),
     "metrics": Kind("a case's metrics.nc", "ballaststudy case run", dims=("cycle",)),
     "strength": Kind("a strength test", "ballaststudy case strength", ("deviator_stress", "axial_strain"),

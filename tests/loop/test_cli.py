@@ -65,9 +65,15 @@ def _argv(tiny, out, config=None):
 
 def test_loop_end_to_end(tiny, tmp_path):
     out = tmp_path / "loop"
-    assert main(_argv(tiny, out) + ["--jobs", "2"]) == 0
+    horizon = tmp_path / "horizon"
+    assert main(["horizon", *map(str, tiny[2]), "--out-dir", str(horizon), "--fit-cycles", "5", "--quiet"]) == 0
+    with xr.open_dataset(horizon / "horizon.nc") as ds:
+        law = str(ds["chosen_law"].values[0])
+    assert law in ("log", "hardening_log")              # the planted log law (hardening_log nests it)
+    assert main(_argv(tiny, out) + ["--jobs", "2", "--horizon", str(horizon / "horizon.nc")]) == 0
     text = (out / "report.md").read_text()
     assert "## DEM horizon" in text and "## Long-term horizon (extrapolated, reported apart)" in text
+    assert f"fitted by the **{law}** law, the law that carried 3 measured curves best from N <= 5" in text
     assert "| fouling | - |" in text and "not testable: no target declares VCI" in text
     assert "**No effect chosen**" in text
     assert yaml.safe_load((out / "chosen.yaml").read_text())["effect"] == "none"
@@ -88,7 +94,8 @@ def test_loop_end_to_end(tiny, tmp_path):
     assert len(cached) == 2 * 3 * (1 + 2 + 2)           # K x tests x (plain + 2 design + 2 refined sets)
     assert "at 2 parameter sets each + 1 x 2 refined around the held-out posteriors" in text
     stamp = [p.stat().st_mtime_ns for p in cached]
-    assert main(_argv(tiny, out)) == 0                   # again: every case reused
+    assert main(_argv(tiny, out)) == 0                   # again: every case reused (no law: nothing extrapolated)
+    assert "No accumulation law given" in (out / "report.md").read_text()
     assert [p.stat().st_mtime_ns for p in cached] == stamp
 
 
@@ -145,6 +152,8 @@ def test_snakefile_plans_the_loop(tmp_path):
     out = _workflow(tmp_path, lambda c: None)
     assert out.returncode == 0, out.stderr
     assert "rule specimen_assemble:" in out.stdout and "ballaststudy loop results/measured/" in out.stdout
+    assert "ballaststudy horizon results/measured/" in out.stdout and "--fit-cycles 1000 10000" in out.stdout
+    assert "--horizon results/horizon/horizon.nc" in out.stdout
 
 
 @pytest.mark.parametrize("change, message", [

@@ -2,9 +2,11 @@
 DEM run and no command line: the per-point order, the long-term horizon when a law cannot
 be fitted, the pooled RMSE, the verdict rule, and loop.nc, chosen.yaml, report.md and
 curves.png of a hand-made run with one effect chosen. The end-to-end loop is test_cli.py's."""
+import dataclasses
 import warnings
 from types import SimpleNamespace
 
+import matplotlib
 import numpy as np
 import pytest
 
@@ -13,10 +15,15 @@ from ballaststudy.loop.cli import Candidate
 from ballaststudy.loop.dataset import loop_dataset
 from ballaststudy.loop.markdown import _verdict_of, report_markdown
 from ballaststudy.loop.outcome import LoopRun, PlainModel, Selection, Targets
-from ballaststudy.loop.plots import plot_curves
+from ballaststudy.loop.plots import _panel, plot_curves
 from ballaststudy.loop.report import chosen_doc
 from ballaststudy.loop.select import ALPHA, HeldOut
+from ballaststudy.loop.accumulation import LawFit
+from ballaststudy.loop.horizon import LongTermLaw
 from ballaststudy.loop.statistics import LongTerm, LoopStatistics, candidate_rows, long_term
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402 (after the backend)
 
 SETTINGS = dict(quantity="axial_strain", cycles=3, cases=2, design_sets=2, refine_rounds=0, refine_sets=2,
                 specimen_share=1.0, measurement_sd=1e-4)
@@ -31,17 +38,30 @@ def test_points_one_after_the_other():
     np.testing.assert_array_equal(TARGETS.y, [0.001, 0.002, 0.0025, 0.001, 0.003])
 
 
+LAW = LongTermLaw("log", 1e3, 0.004, 12)
+
+
 def test_long_term_without_a_fit_or_a_point_beyond():
     """One case cannot be fitted (no scatter to weight by): no fit, NaN extrapolations, and a
-    test with no point beyond the DEM horizon has a NaN RMSE, without a warning."""
+    test with no point beyond the DEM horizon has a NaN RMSE, without a warning; without a
+    law nothing is extrapolated."""
     curves = np.array([[[0.001, 0.002, 0.0025]], [[0.001, 0.002, 0.003]]])       # (T, K = 1, cycles)
     beyond = [(np.array([30.0, 500.0]), np.array([0.004, 0.005])), (np.zeros(0), np.zeros(0))]
-    out = long_term(beyond, np.arange(1.0, 4.0), curves)
-    assert out[0].fits == {"sato": None, "shakedown": None} and np.isnan(out[0].predicted["sato"]).all()
-    assert out[0].predicted["sato"].shape == (2,)
+    out = long_term(beyond, np.arange(1.0, 4.0), curves, LAW)
+    assert out[0].fit is None and np.isnan(out[0].predicted).all() and out[0].predicted.shape == (2,)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert np.isnan(out[1].rmse("sato"))
+        assert np.isnan(out[1].rmse()) and np.isnan(out[0].rmse())
+    assert all(lt.fit is None for lt in long_term(beyond, np.arange(1.0, 4.0), np.repeat(curves, 2, axis=1), None))
+
+
+def test_long_term_extrapolates_by_the_given_law():
+    """Two cases of a log curve: the law given is fitted and carried to the points beyond."""
+    cycles = np.arange(1.0, 6.0)
+    curves = (0.001 + 0.002 * np.log(cycles) + np.array([[-1e-5], [1e-5]]))[None]   # (T = 1, K = 2, cycles)
+    beyond = [(np.array([100.0, 1e4]), 0.001 + 0.002 * np.log(np.array([100.0, 1e4])))]
+    (lt,) = long_term(beyond, cycles, curves, LAW)
+    assert lt.fit.name == "log" and lt.rmse() < 1e-6
 
 
 def test_the_verdict_follows_the_rule():
@@ -67,8 +87,7 @@ def _chosen_run():
     run = LoopRun(SETTINGS, TARGETS, plain_model, selection, {}, minutes=0.5)
     rows = [dict(test=name, source="planted", points=3, rmse=2e-4 * (j + 1), bias=1e-4, bias_p=0.5, slope_ln_n=0.0,
                  slope_p=np.nan) for j, name in enumerate(TARGETS.names)]
-    no_fit = LongTerm(np.zeros(0), np.zeros(0), {"sato": np.zeros(0), "shakedown": np.zeros(0)},
-                      {"sato": None, "shakedown": None})
+    no_fit = LongTerm(np.zeros(0), np.zeros(0), np.zeros(0), None)
     stats = LoopStatistics(rows, [r | dict(rmse=1e-4) for r in rows], [], candidate_rows(selection, TARGETS),
                            [no_fit] * 2, [no_fit] * 2, rmse(TARGETS.y, plain_model.prediction))
     return run, stats
@@ -89,8 +108,34 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert "16 DEM cases (0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
     assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] |" in text
     assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text
+    assert "No accumulation law given" in text and ds.attrs["long_term_law"] == "none"
     plot_curves(tmp_path / "curves.png", run, stats)
     assert (tmp_path / "curves.png").stat().st_size > 1000
+
+
+def test_the_long_term_law_in_every_output(tmp_path):
+    """A law given: report.md names it with its stated error and says the run is shorter than
+    its N_fit; loop.nc records it; curves.png's scale is set by what was measured and
+    simulated, never by an extrapolation that runs away (the issue's 400,000 % figure)."""
+    run, stats = _chosen_run()
+    run = LoopRun(run.settings, run.targets, run.plain, run.selection, run.base, run.minutes, long_term_law=LAW)
+    beyond = [(np.array([100.0, 5e5]), np.array([0.004, 0.006]))] * 2
+    stats = LoopStatistics(stats.before, stats.after, [], stats.candidates,
+                           long_term(beyond, run.cycles, run.plain.runs["curves"], LAW),
+                           long_term(beyond, run.cycles, run.selection.after["curves"], LAW), stats.plain_rmse)
+    text = report_markdown(run, stats)
+    assert "fitted by the **log** law" in text and "within +-0.4 % (0.9 quantile)" in text
+    assert "This run fits 3 cycles, fewer than 1000" in text
+    ds = loop_dataset(run, stats)
+    assert ds.attrs["long_term_law"] == "log" and ds.attrs["long_term_stated_error"] == 0.004
+    runaway_fit = LawFit("log", np.array([0.0, 30.0]), ("a", "b"), np.zeros((2, 2)), 0.0, 1, 1.0, 3.0)  # 30 per e-fold
+    runaway = dataclasses.replace(stats, long_term=[LongTerm(*beyond[0], np.full(2, 40.0), runaway_fit)] * 2)
+    plot_curves(tmp_path / "curves.png", run, runaway)
+    fig, ax = plt.subplots()
+    _panel(ax, 0, run, runaway)
+    bottom, top = ax.get_ylim()
+    plt.close(fig)
+    assert -0.1 < bottom < 0.1 and 0.6 < top < 0.9            # percent: the data span 0.1-0.6 %
 
 
 def test_no_effect_chosen():

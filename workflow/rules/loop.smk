@@ -10,6 +10,28 @@ try:                                      # before any job: one line, file and k
 except ConfigError as err:
     stop(err)
 LOOP_CALIBRATED = LOOP["parameters"] == "calibrated"
+# every measured cyclic triaxial/biaxial test judges the long-term laws, not only the targets
+HORIZON_TESTS = [t for t in MEASURED_TESTS if load_conditions(MEASURED_TESTS_DIR / f"{t}.yaml")["rig"] != "box"]
+
+
+# `snakemake --cores 2 horizon` (issue 34): each accumulation law fitted to every measured
+# curve up to loop.horizon_fit_cycles and read at its last point -> results/horizon/
+# (horizon.md, horizon.nc, horizon.png); the loop extrapolates with the law chosen there.
+rule horizon:
+    input:
+        [f"{RESULTS}/measured/{t}.nc" for t in HORIZON_TESTS],
+    output:
+        md=report(f"{RESULTS}/horizon/horizon.md", caption="../report/loop.rst", category="Loop"),
+        nc=f"{RESULTS}/horizon/horizon.nc",
+        png=report(f"{RESULTS}/horizon/horizon.png", caption="../report/loop.rst", category="Loop"),
+    params:
+        fit_cycles=" ".join(f"{n:g}" for n in LOOP["horizon_fit_cycles"]),
+        quantity=LOOP["quantity"],
+    log:
+        f"{RESULTS}/logs/loop/horizon.log",
+    shell:
+        "ballaststudy horizon {input} --out-dir {RESULTS}/horizon --fit-cycles {params.fit_cycles} "
+        "--quantity {params.quantity} --quiet > {log} 2>&1"
 
 
 rule loop:
@@ -18,6 +40,7 @@ rule loop:
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in LOOP["targets"]],
         specimens=specimen_files("loop"),
         parameters=[f"{CAL_OUT}/calibrated.yaml"] if LOOP_CALIBRATED else [],
+        horizon=f"{RESULTS}/horizon/horizon.nc",
     output:
         md=report(f"{RESULTS}/loop/report.md", caption="../report/loop.rst", category="Loop"),
         nc=f"{RESULTS}/loop/loop.nc",
@@ -35,5 +58,5 @@ rule loop:
         f"{RESULTS}/logs/loop/loop.log",
     shell:
         "ballaststudy loop {input.measured} --conditions {input.conditions} --specimens "
-        "{input.specimens} {params.parameters} --out-dir {RESULTS}/loop --jobs {threads} "
+        "{input.specimens} {params.parameters} --horizon {input.horizon} --out-dir {RESULTS}/loop --jobs {threads} "
         "--backend {params.backend} --config {params.config} --quiet > {log} 2>&1"

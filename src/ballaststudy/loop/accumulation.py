@@ -8,7 +8,8 @@ Ballast hardens (shakes down) and then creeps slowly, which Sato's form
 
 describes with a bounded hardening part and a constant creep rate. A log or a power law keeps the
 rate it had inside the fitted window: fitted on 10^3-10^4 cycles it overshoots 5e5 by tens of
-percent. Both are kept only as references that show this.
+percent. The hardening-log law keeps Sato's hardening and lets the creep slow down as ln N
+does. Which law carries a measured curve furthest is measured, not assumed (loop/horizon.py).
 
 Strains are fractions; N is the cycle count, N = 1 the first loading.
 """
@@ -42,6 +43,14 @@ def shakedown(n, params):
     return sato(n, (eps0, gamma, alpha, 0.0))
 
 
+def hardening_log(n, params):
+    """eps0 + gamma (1 - exp(-alpha (N - 1))) + c ln N: Sato's hardening with a creep whose
+    rate falls as 1/N (c >= 0, the strain per e-fold of N once hardened), the semi-log
+    growth large triaxial tests on ballast show after the first cycles."""
+    eps0, gamma, alpha, c = params
+    return sato(n, (eps0, gamma, alpha, 0.0)) + c * np.log(np.asarray(n, float))
+
+
 def log_law(n, params):
     """a + b ln N (reference only): a is the strain at N = 1, b the strain per e-fold of N."""
     a, b = params
@@ -54,10 +63,12 @@ def power_law(n, params):
     return a * np.asarray(n, float) ** b
 
 
-LAWS = {"sato": sato, "shakedown": shakedown, "log": log_law, "power": power_law}
+LAWS = {"sato": sato, "shakedown": shakedown, "hardening_log": hardening_log, "log": log_law,
+        "power": power_law}
 PARAMETER_NAMES = {"sato": ("eps0", "gamma", "alpha", "beta"), "shakedown": ("eps0", "gamma", "alpha"),
-                   "log": ("a", "b"), "power": ("a", "b")}
-_FITTED_AS_LOG = {"sato": ("alpha",), "shakedown": ("alpha",)}   # rates spanning decades: fitted as logs
+                   "hardening_log": ("eps0", "gamma", "alpha", "c"), "log": ("a", "b"), "power": ("a", "b")}
+HARDENING_LAWS = ("sato", "shakedown", "hardening_log")     # the laws with a hardening rate alpha
+_FITTED_AS_LOG = {law: ("alpha",) for law in HARDENING_LAWS}   # rates spanning decades: fitted as logs
 
 
 @dataclass(frozen=True)
@@ -122,27 +133,28 @@ def _hardening_rate_range(n):
 
 def _bounds(name, n):
     """(lower, upper) bounds of the parameters of law `name` fitted on cycle counts n."""
-    if name in ("sato", "shakedown"):
+    if name in HARDENING_LAWS:
         slowest, fastest = _hardening_rate_range(n)
         lower, upper = np.array([-np.inf, 0.0, slowest, 0.0]), np.array([np.inf, np.inf, fastest, np.inf])
-        return (lower, upper) if name == "sato" else (lower[:3], upper[:3])
+        return (lower, upper) if name != "shakedown" else (lower[:3], upper[:3])
     if name == "power":
         return np.array([0.0, -np.inf]), np.array([np.inf, np.inf])
     return np.full(2, -np.inf), np.full(2, np.inf)
 
 
-def _start_sato(n, eps, weights, creep=True):
+def _start_sato(n, eps, weights, creep="linear"):
     """Start at the best alpha of a log grid over the resolved range: for fixed alpha the law is
-    linear in (eps0, gamma, beta), solved exactly with gamma, beta >= 0, so the nonlinear fit
-    begins in the right valley instead of a local minimum next to a guessed alpha. Without
-    creep (the shakedown law) beta is left out."""
+    linear in (eps0, gamma, creep), solved exactly with gamma, creep >= 0, so the nonlinear fit
+    begins in the right valley instead of a local minimum next to a guessed alpha. creep:
+    "linear" (Sato, beta (N - 1)), "log" (hardening_log, c ln N) or None (shakedown)."""
     cycles_after_first = n - 1.0
-    span = cycles_after_first.max()
-    width = 3 if creep else 2
+    creep_term = {"linear": cycles_after_first, "log": np.log(n), None: np.zeros_like(n)}[creep]
+    span = max(creep_term.max(), 1e-300)
+    width = 2 if creep is None else 3
 
     def profile(alpha):
         design = np.column_stack([np.ones_like(n), -np.expm1(-alpha * cycles_after_first),
-                                  cycles_after_first / span])[:, :width]
+                                  creep_term / span])[:, :width]
         solution = lsq_linear(design * weights[:, None], eps * weights,
                               bounds=([-np.inf] + [0.0] * (width - 1), [np.inf] * width), method="bvls")
         return solution.cost, alpha, solution.x
@@ -166,7 +178,8 @@ def _start_power(n, eps, weights):
     return np.array([np.exp(ln_a), b])
 
 
-_STARTS = {"sato": _start_sato, "shakedown": lambda n, eps, w: _start_sato(n, eps, w, creep=False),
+_STARTS = {"sato": _start_sato, "shakedown": lambda n, eps, w: _start_sato(n, eps, w, creep=None),
+           "hardening_log": lambda n, eps, w: _start_sato(n, eps, w, creep="log"),
            "log": _start_log, "power": _start_power}
 
 

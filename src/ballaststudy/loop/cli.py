@@ -2,7 +2,7 @@
 
     ballaststudy loop results/measured/<t1>.nc ... --conditions config/measured/<t1>.yaml ...
         --specimens S0.nc S1.nc ... --out-dir results/loop [--parameters calibrated.yaml]
-        [--jobs 2] [--config config/config.yaml]
+        [--horizon results/horizon/horizon.nc] [--jobs 2] [--config config/config.yaml]
 
 1. The plain model (Table 4.2's or calibrated parameters): K cases under every test; the
    residual per test in the DEM horizon (loop/residual.py) and its relation to the tests'
@@ -14,8 +14,9 @@
    these specimens) the plain cases run once more from perturbed velocities: the chaos
    probe, the noise model's scale.
 3. The chosen effect at its parameter fitted on all tests, run again: the error after.
-4. The long-term horizon: Sato's law fitted to each ensemble (loop/accumulation.py) carries
-   it to the measured points beyond the simulated cycles, reported apart.
+4. The long-term horizon: the accumulation law the measured curves chose (--horizon, from
+   `ballaststudy horizon`) fitted to each ensemble carries it to the measured points beyond
+   the simulated cycles, with that law's error on measured curves, reported apart.
 Writes loop.nc, report.md, chosen.yaml and one figure per test into the folder; the cases
 are cached by parameter hash under cases/ (an interrupted loop resumes)."""
 import time
@@ -28,11 +29,12 @@ from ..calibration.bayes import initial_design
 from ..calibration.cli import checked_targets, target_arguments
 from ..calibration.evaluate import Evaluator
 from ..config import ConfigError, job_seed, load_config
-from ..inputs import writable_dir
+from ..inputs import open_netcdf, writable_dir
 from ..measured.importer import load_conditions
 from ..provenance import Recorder
 from ..scenario.modifiers import EFFECTS, MODIFIERS, load_material_values
 from ..scenario.runner import check_backend
+from .horizon import chosen_for
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
 from .select import choose, held_out_plain, judge_candidate, residual_covariances
@@ -166,10 +168,12 @@ def _loop(args):
     out = writable_dir(args.out_dir)
     measured = _points(args, cfg)
     base = load_material_values(args.parameters) if args.parameters else {}
+    long_term_law = chosen_for(open_netcdf(args.horizon, "horizon"), lp["cycles"]) if args.horizon else None
     targets = Targets(args.conditions, args.measured, measured)
     y, point_test = targets.y, targets.point_test
     recorder = Recorder("loop", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
-                                        *([args.parameters] if args.parameters else [])),
+                                        *([args.parameters] if args.parameters else []),
+                                        *([args.horizon] if args.horizon else [])),
                         params={"loop": lp, "base": base}, seed=cfg["seed"])
     t0 = time.time()
 
@@ -197,7 +201,8 @@ def _loop(args):
     files = write_outputs(out, LoopRun(
         lp, targets,
         PlainModel(plain_eval.sets[0], plain_at.mean(axis=0), plain, probe_set),
-        Selection(candidates, evidence, chosen, after, untestable), base, minutes=(time.time() - t0) / 60))
+        Selection(candidates, evidence, chosen, after, untestable), base, minutes=(time.time() - t0) / 60,
+        long_term_law=long_term_law))
     recorder.finish()
     sets = plain_eval.sets + (probe_eval.sets if probe_eval else []) + [st for c in candidates.values() for st in c.evaluate.sets]
     cases = [f for st in sets for per_test in st["cases"] for f in per_test]  # this run's sets
@@ -213,5 +218,8 @@ def register(subparsers):
     target_arguments(c, "K assembled biaxial specimens (case assemble --rig biaxial)")
     c.add_argument("--parameters", type=Path, help="a calibrated.yaml: the plain model's material "
                    "parameters (default Table 4.2's)")
+    c.add_argument("--horizon", type=Path, help="a horizon.nc (ballaststudy horizon): the accumulation law "
+                   "the long-term horizon extrapolates with, and its error on measured curves (default: none, "
+                   "nothing extrapolated)")
     c.set_defaults(func=_loop)
     return c

@@ -32,7 +32,16 @@ def loop_dataset(run, stats):
                "tests_json": json.dumps(stats.before), "covariate_tests_json": json.dumps(stats.covariates),
                "candidates_json": json.dumps(stats.candidates), "chosen": sel.chosen or "none",
                "material_parameters_json": json.dumps(run.base),
-               "untestable_effects": ", ".join(sel.untestable) or "none"})
+               "untestable_effects": ", ".join(sel.untestable) or "none", **_long_term_attrs(run.long_term_law)})
+
+
+def _long_term_attrs(law):
+    """The long-term law the report extrapolated with and its error on measured curves."""
+    if law is None:
+        return {"long_term_law": "none"}
+    return {"long_term_law": law.name, "long_term_fit_cycles": law.fit_cycles,
+            "long_term_stated_error": law.stated_error, "long_term_stated_error_units": "1",
+            "long_term_curves": law.curves}
 
 
 def _points(targets, units, long_name):

@@ -6,7 +6,8 @@ import numpy as np
 from ..metrics.output import display_scale
 from ..scenario.modifiers import MODIFIERS
 from .select import ALPHA
-from .statistics import LONG_TERM_LAWS, SIGNALS
+from .horizon import STATED_QUANTILE
+from .statistics import SIGNALS
 
 
 def report_markdown(run, stats):
@@ -14,7 +15,7 @@ def report_markdown(run, stats):
     scale, unit = display_scale(run.settings["quantity"])
     lines = (_opening(run, stats, unit) + _dem_horizon(stats, scale) + _covariates(stats)
              + _candidates(run, stats, scale, unit) + _verdict(run, stats, scale, unit)
-             + _long_term(stats, scale, run.targets.names, run.settings["cycles"]))
+             + _long_term(run, stats, scale, unit))
     return "\n".join(lines) + "\n"
 
 
@@ -115,21 +116,28 @@ def _verdict(run, stats, scale, unit):
             "held out (each test predicted from the others, by the surrogate).", ""]
 
 
-def _long_term(stats, scale, names, cycles):
-    lines = ["## Long-term horizon (extrapolated, reported apart)", "",
-             "Each ensemble mean over the simulated cycles fitted by Sato's law eps0 + gamma (1 - exp(-alpha "
-             "(N - 1))) + beta (N - 1) and by the shakedown law (beta = 0), extrapolated to the measured points "
-             "beyond them. A run too short to tell hardening from creep is read both ways: creep carried over "
-             "decades of N (Sato) against none (shakedown). Read it as what the DEM horizon implies, not as a "
-             "prediction the DEM made.", "",
-             "| test | points beyond | decades extrapolated | RMSE Sato before / after | RMSE shakedown before / after "
-             "| Sato gamma, alpha, beta (plain) |", "|---|---|---|---|---|---|"]
+def _long_term(run, stats, scale, unit):
+    law, cycles = run.long_term_law, run.settings["cycles"]
+    lines = ["## Long-term horizon (extrapolated, reported apart)", ""]
+    if law is None:
+        return lines + ["No accumulation law given (`ballaststudy horizon` chooses one on measured curves): "
+                        "nothing extrapolated beyond the DEM horizon.", ""]
+    lines += [f"Each ensemble mean over the simulated cycles fitted by the **{law.name}** law, the law that carried "
+              f"{law.curves} measured curves best from N <= {law.fit_cycles:g} to their last points (horizon.md), "
+              "and extrapolated to the measured points beyond the DEM horizon. On those curves its error at the "
+              f"last point was within +-{scale * law.stated_error:.3g} {unit} ({STATED_QUANTILE:g} quantile): "
+              "the uncertainty stated with every extrapolation here."]
+    if cycles < law.fit_cycles:
+        lines[-1] += (f" This run fits {cycles} cycles, fewer than {law.fit_cycles:g}: from so short a run the "
+                      "error can only be larger, by an amount no measured curve can tell. Read the table as what the "
+                      "DEM horizon implies, not as a prediction the DEM made.")
+    lines += ["", "| test | points beyond | decades extrapolated | RMSE before / after | law's parameters (plain) |",
+              "|---|---|---|---|---|"]
     for j, lt in enumerate(stats.long_term):
         after = stats.long_term_after[j] if stats.long_term_after else None
-        cells = [f"{scale * lt.rmse(law):.3g} / " + (f"{scale * after.rmse(law):.3g}" if after else "-")
-                 for law in LONG_TERM_LAWS]
-        fit = lt.fits["sato"]
-        law = "no fit (did not converge)" if fit is None else ", ".join(f"{x:.3g}" for x in fit.params[1:])
+        cell = f"{scale * lt.rmse():.3g} / " + (f"{scale * after.rmse():.3g}" if after else "-")
+        params = ("no fit (did not converge)" if lt.fit is None else
+                  ", ".join(f"{k} {x:.3g}" for k, x in zip(lt.fit.names, lt.fit.params)))
         decades = f"{np.log10(lt.n.max() / cycles):.1f}" if lt.n.size else "-"
-        lines.append(f"| {names[j]} | {lt.n.size} | {decades} | {cells[0]} | {cells[1]} | {law} |")
+        lines.append(f"| {run.targets.names[j]} | {lt.n.size} | {decades} | {cell} | {params} |")
     return lines + [""]

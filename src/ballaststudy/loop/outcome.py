@@ -64,6 +64,7 @@ class LoopRun:
     selection: Selection
     base: dict                 # the plain model's material parameters ({}: Table 4.2's)
     minutes: float             # wall time of this run
+    long_term_law: object = None   # horizon.LongTermLaw the measured curves chose; None: none given
 
     @property
     def cycles(self):

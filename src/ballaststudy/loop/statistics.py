@@ -2,7 +2,8 @@
 
 Two horizons, never mixed: the DEM horizon (measured points with N <= the simulated
 cycles, compared with the ensembles) and the long-term horizon (points beyond, compared
-with Sato's law fitted to each ensemble mean and extrapolated - an extrapolation, said so)."""
+with the law the measured curves chose (loop/horizon.py) fitted to each ensemble mean and
+extrapolated - an extrapolation, said so, with the error that law made on measured curves)."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,20 +18,19 @@ from .residual import covariate_tests, residual, summary
 COVARIATES = ("frequency_Hz", "confining_pressure_kPa", "deviator_max_kPa", "VCI")
 # the plain model's internal signals at its last simulated cycle (mean over the cases)
 SIGNALS = ("breakage_rate", "mean_coordination", "void_ratio", "volumetric_strain")
-LONG_TERM_LAWS = ("sato", "shakedown")
 
 
 @dataclass(frozen=True)
 class LongTerm:
-    """One ensemble's long-term horizon at one test."""
+    """One ensemble's long-term horizon at one test, by the law the measured curves chose."""
     n: np.ndarray              # measured N beyond the simulated cycles
     measured: np.ndarray       # the measured values there
-    predicted: dict            # {law: its extrapolation to n} (NaN where it did not fit)
-    fits: dict                 # {law: accumulation.LawFit, or None: did not converge}
+    predicted: np.ndarray      # the law's extrapolation to n (NaN where it did not fit)
+    fit: object                # accumulation.LawFit, or None: no law, or no convergence
 
-    def rmse(self, law):
-        # no point beyond the DEM horizon: nothing to compare (and no mean of nothing)
-        return rmse(self.measured, self.predicted[law]) if self.n.size else float("nan")
+    def rmse(self):
+        # no point beyond the DEM horizon or no fit: nothing to compare (and no mean of nothing)
+        return rmse(self.measured, self.predicted) if self.fit is not None and self.n.size else float("nan")
 
 
 @dataclass(frozen=True)
@@ -66,8 +66,9 @@ def loop_statistics(run):
         before=before, after=after,
         covariates=[r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)],
         candidates=candidate_rows(sel, run.targets),
-        long_term=long_term(beyond, run.cycles, plain_curves),
-        long_term_after=long_term(beyond, run.cycles, sel.after["curves"]) if sel.after is not None else None,
+        long_term=long_term(beyond, run.cycles, plain_curves, run.long_term_law),
+        long_term_after=(long_term(beyond, run.cycles, sel.after["curves"], run.long_term_law)
+                         if sel.after is not None else None),
         plain_rmse=rmse(run.targets.y, run.plain.prediction))
 
 
@@ -112,20 +113,16 @@ def points_beyond(path, quantity, cycles):
     return n[beyond], v[beyond]
 
 
-def long_term(beyond, cycles, curves):
-    """LongTerm per test of an ensemble (T, K, cycles), for Sato's law (hardening + creep)
-    and the shakedown law (no creep): a run too short to tell hardening from creep is read
-    both ways."""
+def long_term(beyond, cycles, curves, law):
+    """LongTerm per test of an ensemble (T, K, cycles) by `law` (horizon.LongTermLaw, or None:
+    no law measured, nothing extrapolated)."""
     out = []
     for (n, v), ensemble in zip(beyond, curves):
-        preds, fits = {}, {}
-        for law in LONG_TERM_LAWS:
-            try:
-                fits[law] = fit_ensemble(law, cycles, ensemble)
-                preds[law] = predict(fits[law], n)[0]
-            except (RuntimeError, ValueError):     # no convergence (a flat, censored ensemble)
-                fits[law], preds[law] = None, np.full(n.size, np.nan)
-        out.append(LongTerm(n, v, preds, fits))
+        try:
+            fit = fit_ensemble(law.name, cycles, ensemble) if law else None
+        except (RuntimeError, ValueError):         # no convergence (a flat, censored ensemble)
+            fit = None
+        out.append(LongTerm(n, v, predict(fit, n)[0] if fit else np.full(n.size, np.nan), fit))
     return out
 
 
