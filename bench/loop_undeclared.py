@@ -15,6 +15,7 @@ The slow test tests/loop/test_undeclared.py asserts the same scenarios at their 
         [--size-m W H]   # the specimens' width and height (m)
         [--fresh]    # the truth on K fresh specimens (their scatter too; specimen_share 1)
                      # instead of the loop's own (common random numbers; share 0)
+        [--fresh-per-test]  # K fresh specimens per test, as a laboratory builds one per test
         [--probes M]  # chaos probes of each truth for its irreducible RMSE (default 3)
 """
 import argparse
@@ -28,10 +29,11 @@ from ballaststudy.calibration.bayes import rmse
 from ballaststudy.loop.cli import PROBE_M_S
 
 ROOT = Path(__file__).resolve().parents[1]
-# the planted scenarios are a test helper (tests/loop/synthetic.py), not part of the package
-sys.path.insert(0, str(ROOT / "tests" / "loop"))
-from synthetic import (NOISE_SHARE, PLANTED, SCENARIO_BASE, SCENARIO_TESTS, irreducible_rmse,  # noqa: E402
-                       run_scenario, scenario_setup, truth_runs)
+# the planted scenarios are a test helper (tests/loop/synthetic.py), not part of the package;
+# it imports its sibling helpers relatively, so it is imported as tests.loop.synthetic
+sys.path.insert(0, str(ROOT))
+from tests.loop.synthetic import (NOISE_SHARE, PLANTED, SCENARIO_BASE, SCENARIO_TESTS,  # noqa: E402
+                                  irreducible_rmse, run_scenario, scenario_setup, truth_runs)
 
 
 def per_test_rmse(loop_nc, effect):
@@ -76,6 +78,7 @@ def parse():
     ap.add_argument("--ball-radius", type=float, default=0.008)
     ap.add_argument("--size-m", type=float, nargs=2, default=None, metavar=("W", "H"))
     ap.add_argument("--fresh", action="store_true")
+    ap.add_argument("--fresh-per-test", action="store_true")
     ap.add_argument("--probes", type=int, default=3, help="chaos probes of each truth (irreducible RMSE)")
     return ap.parse_args()
 
@@ -85,13 +88,17 @@ if __name__ == "__main__":
     setup = {"size_m": tuple(args.size_m)} if args.size_m else {}
     setup.update(refine_rounds=args.refine_rounds, refine_sets=args.refine_sets)
     library = dict(n_stones=args.stones, size=tuple(args.stone_size), r0=args.ball_radius)
+    args.fresh = args.fresh or args.fresh_per_test
     specimens, config, _ = scenario_setup(args.out, ROOT / "config/config.yaml", args.cases, args.cycles,
                                           args.design_sets, 1.0 if args.fresh else 0.0, library, **setup)
     fresh = None
-    if args.fresh:      # K more specimens of the same library (cases K .. 2K-1)
-        fresh, _, _ = scenario_setup(args.out / "fresh", ROOT / "config/config.yaml", 2 * args.cases,
-                                     args.cycles, args.design_sets, 1.0, library, **setup)
+    if args.fresh:      # more specimens of the same library (cases K .. 2K-1, or K .. (T + 1) K - 1)
+        sets = len(SCENARIO_TESTS) if args.fresh_per_test else 1
+        fresh, _, _ = scenario_setup(args.out / "fresh", ROOT / "config/config.yaml", args.cases, args.cycles,
+                                     args.design_sets, 1.0, library, assemble=(sets + 1) * args.cases, **setup)
         fresh = fresh[args.cases:]
+        if args.fresh_per_test:
+            fresh = [fresh[j * args.cases:(j + 1) * args.cases] for j in range(sets)]
     for name in args.scenarios:
         t0 = time.time()
         chosen, candidates, plain = run_scenario(args.out, name, specimens, args.cycles, fresh)

@@ -13,7 +13,9 @@ covariates; no effect, no strength) and the curve file, imported to the test's n
 
 Given the loop's own specimens the truth is the model's ensemble with the effect (common
 random numbers: the effect's signature without a new specimen's scatter, run the loop with
-``specimen_share`` 0); given fresh specimens it carries their scatter too (share 1)."""
+``specimen_share`` 0); given fresh specimens it carries their scatter too (share 1): one
+set for every test (one offset shared by all tests), or a set per test, as a laboratory
+builds a specimen for each test."""
 import json
 import math
 from dataclasses import dataclass
@@ -108,14 +110,19 @@ def irreducible_rmse(runs, probes, cycles, point_test, noise_sd):
 def plant(folder, tests, specimens, config, cycles, effect=None, values=None, base=None,
           noise_share=NOISE_SHARE, seed=0, cache=None, jobs=1):
     """Write the planted tests t<j>.yaml / t<j>.dat / t<j>.nc into ``folder``; returns
-    (measured netCDFs, conditions YAMLs). The truth's cases go to ``cache`` (default folder)."""
+    (measured netCDFs, conditions YAMLs). The truth's cases go to ``cache`` (default folder).
+    ``specimens``: one list for every test, or a list per test (per_test_specimens)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     conditions = []
     for j, t in enumerate(tests):
         conditions.append(folder / f"t{j}.yaml")
         conditions[-1].write_text(yaml.safe_dump(t.conditions(f"t{j}.dat"), sort_keys=False))
-    truth = truth_curves(conditions, specimens, config, cycles, cache or folder, effect, values, base, jobs)
+    if isinstance(specimens[0], (list, tuple)):
+        truth = np.concatenate([truth_curves([c], s, config, cycles, cache or folder, effect, values, base, jobs)
+                                for c, s in zip(conditions, specimens)])
+    else:
+        truth = truth_curves(conditions, specimens, config, cycles, cache or folder, effect, values, base, jobs)
     rng = np.random.default_rng(seed)
     measured = []
     for j, curve in enumerate(truth):
@@ -152,10 +159,11 @@ def library_spec(library=None):
 
 
 def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, specimen_share=0.0,
-                   library=None, size_m=(0.12, 0.24), refine_rounds=2, refine_sets=4):
-    """A synthetic BPM library, a config for the loop at this scale and ``cases`` assembled
-    biaxial specimens in ``folder``; returns (specimens, config, base parameters YAML). The
-    defaults are the slow test's scale (tests/loop/test_undeclared.py says why)."""
+                   library=None, size_m=(0.12, 0.24), refine_rounds=2, refine_sets=4, assemble=None):
+    """A synthetic BPM library, a config for the loop at this scale and ``assemble`` (default
+    ``cases``) assembled biaxial specimens in ``folder``; returns (specimens, config, base
+    parameters YAML). The defaults are the slow test's scale (tests/loop/test_undeclared.py
+    says why)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     lib = library_spec(library)
@@ -169,7 +177,7 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
                        posterior_samples=4096, specimen_share=float(specimen_share))
     (folder / "config.yaml").write_text(yaml.safe_dump(cfg))
     (folder / "base.yaml").write_text(yaml.safe_dump({"parameters": SCENARIO_BASE}))
-    specimens = [folder / f"s{k}.nc" for k in range(cases)]
+    specimens = [folder / f"s{k}.nc" for k in range(assemble or cases)]
     for k, s in enumerate(specimens):
         if not s.exists():
             main(["case", "assemble", str(folder / "BPM.nc"), "--case", str(k), "--rig", "biaxial", "--width-m",

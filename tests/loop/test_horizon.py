@@ -11,7 +11,7 @@ import xarray as xr
 from ballaststudy.cli import main
 from ballaststudy.loop.accumulation import LAWS, fit_law, hardening_log
 from ballaststudy.loop.horizon import chosen_for, enters, horizon_table, measured_curve
-from tests.measured.test_import import write_test
+from ..measured.test_import import write_test
 
 FAR = 5e5
 GRID = np.geomspace(1.0, FAR, 40)            # a measured curve's cycle counts, log-spaced

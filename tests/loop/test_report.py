@@ -65,8 +65,9 @@ def test_long_term_extrapolates_by_the_given_law():
 
 
 def test_the_verdict_follows_the_rule():
-    row = dict(chosen=False, p=ALPHA / 2 - 1e-3, gain=3.0)
+    row = dict(chosen=False, p=ALPHA / 2 - 1e-3, gain=3.0, mse_cut=2e-8, scatter_mse=1e-8)
     assert _verdict_of(row, 2) == "passes, smaller gain"
+    assert _verdict_of(row | dict(mse_cut=0.5e-8), 2) == "rejected: held-out cut within the scatter"
     assert _verdict_of(row | dict(gain=-1.0), 2) == "rejected: no gain"
     assert _verdict_of(row | dict(p=ALPHA / 2), 2) == "rejected: gain not consistent across tests"
     assert _verdict_of(row | dict(chosen=True), 2) == "chosen"
@@ -81,7 +82,7 @@ def _chosen_run():
     held = HeldOut(np.array([1.0, 2.0]), TARGETS.y + 1e-4, np.zeros((2, 1)))
     candidate = Candidate(np.array([[0.0], [1.2]]), [], held, (np.array([0.3]), np.array([[0.2, 0.4]]), 100.0),
                           SimpleNamespace(sets=design + [after]))
-    evidence = dict(gain=5.0, se=1.0, z=5.0, wins=2, tests=2, p=0.01)
+    evidence = dict(gain=5.0, se=1.0, z=5.0, wins=2, tests=2, p=0.01, mse_cut=4e-8, scatter_mse=1e-8)
     selection = Selection({"end_restraint": candidate}, {"end_restraint": evidence}, "end_restraint", after, ["fouling"])
     plain_model = PlainModel(plain, TARGETS.y + 2e-4, HeldOut(np.array([0.5, 1.5]), TARGETS.y + 2e-4, np.zeros((2, 0))))
     run = LoopRun(SETTINGS, TARGETS, plain_model, selection, {}, minutes=0.5)
@@ -107,6 +108,7 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     text = report_markdown(run, stats)
     assert "16 DEM cases (0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
     assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] |" in text
+    assert "| 0.01 | 2 | chosen |" in text                   # held-out RMSE, cut / scatter sqrt(4), verdict
     assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text
     assert "No accumulation law given" in text and ds.attrs["long_term_law"] == "none"
     plot_curves(tmp_path / "curves.png", run, stats)

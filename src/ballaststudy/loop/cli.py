@@ -37,7 +37,7 @@ from ..scenario.runner import check_backend
 from .horizon import chosen_for
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
-from .select import choose, held_out_plain, judge_candidate, residual_covariances
+from .select import choose, held_out_plain, judge_candidate, residual_covariances, scatter_mse
 
 # the chaos probe's velocity perturbation (specimen_share 0): far below any physical speed
 # of the test; the chaos it starts is saturated - runs perturbed by 1e-9, 1e-6 and 1e-4 m/s
@@ -135,7 +135,7 @@ class Candidate:
 def _refine(runs, plain_at, probe_at, y, point_test, lp, seed):
     """_judge after ``refine_rounds`` rounds of refined_design sets added to every
     candidate's runs (in place; the grid's spacing halved each round)."""
-    candidates, plain = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
+    candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
     for r in range(lp["refine_rounds"]):
         for name, (thetas, at, evaluate) in runs.items():
             lower, upper = _bounds(name)
@@ -143,13 +143,13 @@ def _refine(runs, plain_at, probe_at, y, point_test, lp, seed):
             new = refined_design(candidates[name].held.theta_mean, lower, upper, spacing, lp["refine_sets"],
                                  job_seed(seed, f"loop/{name}/refine{r}"))
             runs[name] = (np.vstack([thetas, new]), at + evaluate(new), evaluate)
-        candidates, plain = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
-    return candidates, plain
+        candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
+    return candidates, plain, scatter
 
 
 def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
-    """({effect: Candidate}, the plain model's select.HeldOut): every candidate and the
-    plain model under one noise model, made from the plain runs
+    """({effect: Candidate}, the plain model's select.HeldOut, its scatter_mse): every
+    candidate and the plain model under one noise model, made from the plain runs
     (select.residual_covariances)."""
     covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
                                             probe_at)
@@ -158,7 +158,7 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
     for name, (thetas, at, evaluate) in runs.items():
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
         out[name] = Candidate(thetas, at, *judge_candidate(*args), evaluate)
-    return out, plain
+    return out, plain, scatter_mse(plain_covs)
 
 
 def _loop(args):
@@ -190,8 +190,8 @@ def _loop(args):
     conditions = [load_conditions(c) for c in args.conditions]
     untestable = [e for e in lp["effects"] if not MODIFIERS[e].testable(conditions)]
     runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
-    candidates, plain = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"])
-    chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()})
+    candidates, plain, scatter = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"])
+    chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, scatter)
     after = None
     if chosen:
         best = candidates[chosen]

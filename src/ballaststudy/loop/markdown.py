@@ -82,7 +82,16 @@ def _verdict_of(c, candidates):
         return "chosen"
     if c["p"] >= ALPHA / candidates:
         return "rejected: gain not consistent across tests"
-    return "passes, smaller gain" if c["gain"] > 0 else "rejected: no gain"
+    if c["gain"] <= 0:
+        return "rejected: no gain"
+    return "passes, smaller gain" if c["mse_cut"] > c["scatter_mse"] else "rejected: held-out cut within the scatter"
+
+
+def _cut_words(c):
+    """sqrt(cut) / sqrt(scatter): above 1 the cut stands beyond the scatter; a negative cut
+    (the effect predicts worse) keeps its sign."""
+    ratio = c["mse_cut"] / c["scatter_mse"] if c["scatter_mse"] > 0 else np.inf
+    return f"{np.sign(ratio) * np.sqrt(abs(ratio)):.2g}"
 
 
 def _candidates(run, stats, scale, unit):
@@ -92,14 +101,18 @@ def _candidates(run, stats, scale, unit):
              "points predicted. Gain = sum over tests of held-out log predictive density minus the plain "
              "model's, every model under one noise model: " + _noise_words(run.settings)
              + f" Rule: one-sided Wilcoxon signed-rank test of the per-test gains, p < {ALPHA:g} / "
-             f"{len(cands)} (candidates); the largest gain among the passing is chosen.", "",
-             "| effect | parameter: fitted mean [90 %] | gain | SE | tests better | p | held-out RMSE | verdict |",
-             "|---|---|---|---|---|---|---|---|"]
+             f"{len(cands)} (candidates), and a held-out cut beyond the scatter: the plain model's held-out "
+             "mean squared error minus the effect's exceeds the squared residual a correct model expects under "
+             "the noise model (shown as the cut's root over the scatter's); the largest gain among the passing "
+             "is chosen.", "",
+             "| effect | parameter: fitted mean [90 %] | gain | SE | tests better | p | held-out RMSE "
+             "| cut / scatter | verdict |", "|---|---|---|---|---|---|---|---|---|"]
     for c in cands:
         par = ", ".join(f"{n} {m:.3g} [{lo:.3g}, {hi:.3g}]" for n, m, (lo, hi) in zip(c["parameters"], c["mean"], c["interval90"]))
         lines.append(f"| {c['effect']} | {par} | {c['gain']:.3g} | {c['se']:.3g} | {c['wins']}/{c['tests']} | "
-                     f"{_fmt_p(c['p'])} | {scale * c['held_out_rmse']:.3g} | {_verdict_of(c, len(cands))} |")
-    lines += [f"| {e} | - | - | - | - | - | - | not testable: no target declares {MODIFIERS[e].covariate} "
+                     f"{_fmt_p(c['p'])} | {scale * c['held_out_rmse']:.3g} | {_cut_words(c)} | "
+                     f"{_verdict_of(c, len(cands))} |")
+    lines += [f"| {e} | - | - | - | - | - | - | - | not testable: no target declares {MODIFIERS[e].covariate} "
               "(its runs would be the plain model's), not run |" for e in run.selection.untestable]
     return lines + ["", f"Plain model RMSE over all points: {scale * stats.plain_rmse:.3g} {unit} (nothing fitted: fitted = held out).", ""]
 
