@@ -113,6 +113,18 @@ def test_loop_checks_before_any_case(tiny, tmp_path, capsys, change, key):
     assert not out.exists() or not any(out.rglob("*.nc"))
 
 
+def test_a_horizon_table_of_another_quantity_is_refused(tiny, tmp_path, capsys):
+    from ballaststudy.loop.horizon import horizon_table
+    n = np.geomspace(1.0, 1e4, 20)
+    table = tmp_path / "horizon.nc"
+    horizon_table({"t": (n, 0.001 * np.log(n))}, [100.0], quantity="volumetric_strain").to_netcdf(table)
+    out = tmp_path / "out"
+    assert main(_argv(tiny, out) + ["--horizon", str(table)]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and "quantity: 'volumetric_strain'; allowed: the loop's 'axial_strain'" in line, line
+    assert not out.exists() or not any(out.rglob("*.nc"))
+
+
 def test_the_cuda_backend_is_refused_without_a_gpu(tmp_path):
     """--backend cuda where numba sees no CUDA GPU: one line naming the option, exit 2,
     before anything is read or written (numba's CUDA simulator, which the GPU tests

@@ -161,6 +161,15 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
     return out, plain, scatter_mse(plain_covs)
 
 
+def _long_term_law(path, lp):
+    """The horizon table's law for this loop's cycles; the table must be of loop.quantity."""
+    table = open_netcdf(path, "horizon")
+    if table.attrs.get("quantity") != lp["quantity"]:
+        raise ConfigError(path, "quantity", f"{table.attrs.get('quantity')!r}; allowed: the loop's "
+                          f"{lp['quantity']!r} (ballaststudy horizon --quantity)")
+    return chosen_for(table, lp["cycles"])
+
+
 def _loop(args):
     check_backend(args.backend)
     cfg = load_config(args.config)
@@ -168,7 +177,7 @@ def _loop(args):
     out = writable_dir(args.out_dir)
     measured = _points(args, cfg)
     base = load_material_values(args.parameters) if args.parameters else {}
-    long_term_law = chosen_for(open_netcdf(args.horizon, "horizon"), lp["cycles"]) if args.horizon else None
+    long_term_law = _long_term_law(args.horizon, lp) if args.horizon else None
     targets = Targets(args.conditions, args.measured, measured)
     y, point_test = targets.y, targets.point_test
     recorder = Recorder("loop", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
