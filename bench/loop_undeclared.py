@@ -106,6 +106,7 @@ if __name__ == "__main__":
               f"{(time.time() - t0) / 60:.1f} min", flush=True)
         for c in candidates:
             print(f"    {c['effect']:13s} gain {c['gain']:9.3g}  {c['wins']}/{c['tests']} better  p {c['p']:.2g}  "
+                  f"cut/scatter {c['mse_cut'] / c['scatter_mse']:+.2f}  "
                   f"held-out RMSE {c['held_out_rmse']:.2e}  fitted {np.round(c['mean'], 3).tolist()} "
                   f"(90 % {np.round(c['interval90'], 3).tolist()})", flush=True)
         if name != "none":
