@@ -50,7 +50,12 @@ passes, none is. Why the second condition: where the measured specimens are not 
 shared offset between them and our ensemble (a softer lab ballast, the same fresh specimens
 under every planted test) is seen by every held-out test alike, and any effect that shifts
 the curve that way wins on every test - abrasion was "chosen" 8 of 8 for a held-out RMSE
-cut of 2 % (issue 34). A cut within the scatter says nothing about the effect. Why not "summed gain
+cut of 2 % (issue 34). A cut within the scatter says nothing about the effect.
+The condition is only as good as the scatter it is given: on the planted DEM scenarios with
+fresh truths (bench/loop_undeclared.py --fresh, 24-stone specimens) the loop's 3 specimens
+all strained ~2e-5 in 24 cycles where 24 fresh ones of the same library spread from 1e-5 to
+2.4e-2 (10 above 10x ours), so the scatter from K = 3 was ~1e3 times too small and an effect
+that softens the model still passed (2026-11-27). Small specimens need more of them. Why not "summed gain
 > 2 standard errors" (SE = sqrt(T var(g)), Vehtari, Gelman & Gabry 2017, reported too): an
 effect whose strength follows a covariate (rate with f) gains little at the low end and a
 lot at the high end, and that spread alone keeps z below 2 with a handful of tests while
