@@ -99,6 +99,7 @@ def plot_horizon(path, ds, curves):
     axes.flat[0].legend(fontsize=6)
     for ax in list(axes.flat)[len(names):]:
         ax.axis("off")
+    fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", bbox_inches="tight")
     plt.close(fig)
