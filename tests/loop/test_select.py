@@ -96,6 +96,9 @@ def test_the_planted_effect_is_named_and_halves_the_held_out_error(truth):
     assert interval[0, 0] <= 0.6 <= interval[0, 1] and ess > 10
 
 
+RICH = 6     # smooth components of a specimen's deviation
+
+
 def _rich_specimens(rng, n, point_test, effect, theta, k, sd=0.001, chaos=2e-4):
     """k specimens whose deviation from the model's mean is a smooth function of ln N with
     RICH components, the same under every test (a softer or stiffer specimen, in a shape of
@@ -110,9 +113,6 @@ def _rich_specimens(rng, n, point_test, effect, theta, k, sd=0.001, chaos=2e-4):
         extra = EFFECTS[effect](theta, t, n[sel]) if effect else 0.0
         out[:, sel] = base + extra + shape[:, sel] + rng.normal(0, chaos, (k, sel.sum()))
     return out
-
-
-RICH = 6
 
 
 def _loop_fresh(truth, seed):

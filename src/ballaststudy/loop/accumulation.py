@@ -148,15 +148,19 @@ def _start_sato(n, eps, weights, creep="linear"):
     begins in the right valley instead of a local minimum next to a guessed alpha. creep:
     "linear" (Sato, beta (N - 1)), "log" (hardening_log, c ln N) or None (shakedown)."""
     cycles_after_first = n - 1.0
-    creep_term = {"linear": cycles_after_first, "log": np.log(n), None: np.zeros_like(n)}[creep]
-    span = max(creep_term.max(), 1e-300)
-    width = 2 if creep is None else 3
+    columns = [np.ones_like(n), None]
+    span = 1.0
+    if creep is not None:            # scaled to order one: bvls works on comparable columns
+        creep_term = cycles_after_first if creep == "linear" else np.log(n)
+        span = creep_term.max()
+        columns.append(creep_term / span)
 
     def profile(alpha):
-        design = np.column_stack([np.ones_like(n), -np.expm1(-alpha * cycles_after_first),
-                                  creep_term / span])[:, :width]
+        columns[1] = -np.expm1(-alpha * cycles_after_first)
+        design = np.column_stack(columns)
         solution = lsq_linear(design * weights[:, None], eps * weights,
-                              bounds=([-np.inf] + [0.0] * (width - 1), [np.inf] * width), method="bvls")
+                              bounds=([-np.inf] + [0.0] * (len(columns) - 1), [np.inf] * len(columns)),
+                              method="bvls")
         return solution.cost, alpha, solution.x
 
     _, alpha, x = min((profile(alpha) for alpha in np.geomspace(*_hardening_rate_range(n), HARDENING_GRID)),

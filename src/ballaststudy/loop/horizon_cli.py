@@ -57,7 +57,7 @@ def horizon_markdown(ds):
 
 
 def _num(x):
-    return "no fit" if not np.isfinite(x) else f"{x:+.3g}" if x < 0 else f"{x:.3g}"
+    return f"{x:.3g}" if np.isfinite(x) else "no fit"
 
 
 def _chosen(ds, k):
