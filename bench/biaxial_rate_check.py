@@ -11,7 +11,7 @@ Specimen: the rig parameters are the config's (rig.biaxial) with --width/--heigh
 --library the small one of tests/rig (a synthetic library of 24 coarse stones, r0 = 8 mm,
 and the tests' shortened assembly/consolidation: fill_area_ratio 0.9, relax_steps 2000,
 consolidation_window_steps 1000), which runs in minutes; the issue's check takes box_test's
-(--library results/bench_cache/box_test_bpm.nc, built by bench/biaxial_benchmark.py) at
+(--library results/bench_cache/config/box_test_bpm.nc, built by bench/biaxial_benchmark.py) at
 0.15 x 0.30 and 0.30 x 0.60 m. --deviator-max applies to both settings; default 60 kPa,
 the tests' value.
 

@@ -26,8 +26,10 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 
 def box_test_library(config, cache="results/bench_cache"):
-    """forms + BPM library of the box_test database (built once, then reused)."""
+    """forms + BPM library of the box_test database under ``config`` (built once per
+    config file name, then reused)."""
     from ballaststudy.cli import main as cli
+    cache = os.path.join(cache, os.path.splitext(os.path.basename(config))[0])
     bpm = os.path.join(cache, "box_test_bpm.nc")
     if not os.path.exists(bpm):
         t = time.perf_counter()

@@ -57,7 +57,7 @@ def main(argv=None):
     ap.add_argument("--height", type=float, default=0.30)
     ap.add_argument("--deviator-max", type=float, default=80.0, metavar="KPA")
     ap.add_argument("--config", default="config/config.yaml")
-    ap.add_argument("--library", default="results/bench_cache/box_test_bpm.nc")
+    ap.add_argument("--library", default="results/bench_cache/config/box_test_bpm.nc")
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args(argv)
     params = base_params(a.config, a.width, a.height, small=False)

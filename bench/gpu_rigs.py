@@ -47,13 +47,22 @@ def arguments(argv=None):
     ap.add_argument("--deviator-max", type=float, default=80.0, metavar="KPA")
     ap.add_argument("--first-loading-inertial-number", type=float, default=1.35e-4)
     ap.add_argument("--check-every", type=int, default=100)
+    ap.add_argument("--budget", type=float, default=float("inf"), metavar="S",
+                    help="no further cycle once S seconds are spent (each of GPU and CPU)")
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--library", help="a BPM.nc (default: box_test's, built once)")
+    ap.add_argument("--assembled", help="an assembled specimen (.nc) to copy instead of "
+                    "assembling one here")
+    ap.add_argument("--assemble-only", metavar="OUT",
+                    help="assemble the specimen on the CPU, save it to OUT and stop (no GPU "
+                    "needed: the GPU run's --assembled)")
     ap.add_argument("--specimen", help=argparse.SUPPRESS)      # the CPU child's
     return ap.parse_args(argv)
 
 
-def assembled(a):
+def assembled(a, path=None):
+    if a.assembled:
+        return Path(a.assembled)
     from case_benchmark import box_test_library
 
     from ballaststudy.config import load_config
@@ -69,7 +78,7 @@ def assembled(a):
     else:
         params.width_m, params.height_m = a.width, a.height
         rig = assemble_biaxial(lib, params, seed=1)
-    path = Path(tempfile.mkdtemp()) / "assembled.nc"
+    path = Path(path or Path(tempfile.mkdtemp()) / "assembled.nc")
     rig.save(path)
     print(f"assembled on the CPU in {time.perf_counter() - t:.0f} s: "
           f"{int(rig.sim.balls.alive.sum())} balls, {rig.layout.bonds_installed} bonds", flush=True)
@@ -100,13 +109,22 @@ def copies(path, a, n):
     return out
 
 
-def timed(runs, drive):
-    """(s to the end of cycle 0, s of the cycles after it, engine runs in those)."""
+def timed(runs, drive, label, cycles, budget_s):
+    """(s to the end of cycle 0, s of the cycles after it, engine runs in those); each
+    cycle's time printed as it ends; no further cycle once budget_s is spent (the rate is
+    then of the cycles done)."""
     t0 = time.perf_counter()
     drive(runs, lambda r: r.run(stop_after=1))
     t1 = time.perf_counter()
+    print(f"[{label}] cycle 0: {t1 - t0:.1f} s", flush=True)
     before = sum(r.engine_runs for r in runs)
-    drive(runs, lambda r: r.run())
+    for k in range(1, 1 + cycles):
+        tk = time.perf_counter()
+        drive(runs, lambda r: r.run(stop_after=1))
+        print(f"[{label}] cycle {k}: {time.perf_counter() - tk:.1f} s", flush=True)
+        if time.perf_counter() - t0 > budget_s:
+            print(f"[{label}] stopped after cycle {k}: --budget {budget_s:g} s spent", flush=True)
+            break
     return t1 - t0, time.perf_counter() - t1, sum(r.engine_runs for r in runs) - before
 
 
@@ -131,8 +149,11 @@ def main(argv=None):
     a = arguments(argv)
     if a.specimen:                     # the CPU child: one copy on the CPU engine
         runs = copies(a.specimen, a, 1)
-        per = report("cpu", runs, a, *timed(runs, one_by_one))
+        per = report("cpu", runs, a, *timed(runs, one_by_one, "cpu", a.cycles, a.budget))
         print("CPU_RESULT " + json.dumps(dict(minutes=per)), flush=True)
+        return 0
+    if a.assemble_only:
+        assembled(a, a.assemble_only)
         return 0
     from ballaststudy.dem.gpu import cuda_available
     from ballaststudy.rig.batched import run_batched
@@ -147,8 +168,12 @@ def main(argv=None):
                              text=True, env=env)
     runs = copies(path, a, a.batch)
     gpu = report("gpu", runs, a, *timed(runs, lambda rs, job: run_batched(
-        rs, job, check_every=a.check_every)))
-    out, _ = child.communicate()
+        rs, job, check_every=a.check_every), "gpu", a.cycles, a.budget))
+    try:                    # the CPU's cycle 0 can outlast the GPU's cycles by far
+        out, _ = child.communicate(timeout=None if a.budget == float("inf") else a.budget)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        out = child.communicate()[0] + "\n[cpu] stopped: --budget spent after the GPU part"
     print("\n".join(line for line in out.splitlines() if not line.startswith("CPU_RESULT")))
     cpu = next((json.loads(line.split(" ", 1)[1])["minutes"] for line in out.splitlines()
                 if line.startswith("CPU_RESULT")), float("nan"))

@@ -3,7 +3,8 @@ form database reused by several test files (generated once per session).
 
 The GPU batch (dem/gpu) runs here under numba's CUDA simulator (CI has no GPU): it is
 switched on before anything imports numba.cuda, which the package does wherever the
-scenario runner is imported (its cuda backend), so here, before any test module."""
+scenario runner is imported (its cuda backend), so here, before any test module. On a
+machine with a GPU, BALLASTSTUDY_TEST_GPU=real runs the same tests on it instead."""
 import copy
 import os
 
@@ -11,8 +12,9 @@ import numba
 import pytest
 import xarray as xr
 
-os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
-numba.config.reload_config()
+if os.environ.get("BALLASTSTUDY_TEST_GPU") != "real":
+    os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+    numba.config.reload_config()
 
 MATERIALS = {"hard": {"mass_fraction": 0.7, "density_kg_m3": 2850.0},
              "soft": {"mass_fraction": 0.3, "density_kg_m3": 2620.0}}

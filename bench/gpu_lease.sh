@@ -1,0 +1,52 @@
+#!/bin/bash
+# The prepared run on a lent GPU machine (../.library/device): issue 33's figures in one call.
+#
+#   bash bench/gpu_lease.sh          (on the device machine, from the repository root)
+#
+# Expects, made beforehand on a CPU machine and carried with the call (.git/info/exclude
+# ignores both):
+#   .whl/       wheels of the packages the device image lacks (cftime, netCDF4, jsonschema
+#               and its three, shapely, trimesh; Python 3.12, manylinux x86-64);
+#   .devcarry/  biaxial_full.nc and box_thesis.nc (bench/gpu_rigs.py --assemble-only: the
+#               full-size biaxial specimen of config.yaml, the box case of thesis.yaml),
+#               cal.yaml (config.yaml with a calibration of 4 + 1 x 2 sets) and the
+#               calibration's inputs under cal/ (the measured test, its conditions, 3
+#               specimens), as `snakemake` builds them.
+# Each step has its own time limit, in the order of what matters most; logs go to $OUT.
+set -u
+OUT=${OUT:-/tmp/out}
+mkdir -p "$OUT"
+export PYTHONUNBUFFERED=1
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
+    --target /tmp/site .whl/*.whl || exit 1
+export PYTHONPATH=/tmp/site:$PWD/src
+nvidia-smi --query-gpu=name,memory.total,driver_version,clocks.sm,clocks.max.sm --format=csv
+python3 -c "import sys, numpy, numba; from importlib.metadata import version as v
+print('python', sys.version.split()[0], 'numpy', numpy.__version__, 'numba', numba.__version__,
+      'numba-cuda', v('numba-cuda'), 'row_stack', hasattr(numpy, 'row_stack'))"
+nproc
+
+step() {   # step NAME SECONDS COMMAND...: one benchmark, its log under $OUT
+    local name=$1 limit=$2; shift 2
+    echo "=== $name (limit $limit s) $(date +%T)"
+    local t0=$SECONDS
+    timeout "$limit" "$@" > "$OUT/$name.log" 2>&1
+    local rc=$?
+    tail -n 25 "$OUT/$name.log"
+    echo "=== $name: rc $rc in $((SECONDS - t0)) s"
+}
+
+step rigs_biaxial 150 python3 bench/gpu_rigs.py --assembled .devcarry/biaxial_full.nc \
+    --batch 100 --cycles 3 --budget 80
+step rigs_box 130 python3 bench/gpu_rigs.py --rig box --config config/thesis.yaml \
+    --assembled .devcarry/box_thesis.nc --batch 160 --cycles 3 --budget 70
+step ensemble 100 python3 bench/gpu_ensemble.py --batches 1,100,1000 --steps 1000 \
+    --cpu-steps 1000 --check-steps 300 --bonded-batches 100
+step calibrate_cuda 120 python3 -m ballaststudy.cli calibrate .devcarry/cal/p60_q230_f5.nc \
+    --conditions .devcarry/cal/p60_q230_f5.yaml --specimens .devcarry/cal/case0.nc \
+    .devcarry/cal/case1.nc .devcarry/cal/case2.nc --out-dir "$OUT/cal_cuda" --backend cuda \
+    --config .devcarry/cal.yaml
+(cd "$OUT/cal_cuda" 2>/dev/null && tar czf "$OUT/cal_cuda.tgz" evaluations.nc summary.md \
+    calibrated.yaml && rm -rf "$OUT/cal_cuda")
+BALLASTSTUDY_TEST_GPU=real step tests_real_gpu 90 python3 -m pytest tests/dem/gpu -q -n 4 \
+    -p no:cacheprovider
