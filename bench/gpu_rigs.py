@@ -109,23 +109,33 @@ def copies(path, a, n):
     return out
 
 
-def timed(runs, drive, label, cycles, budget_s):
+def timed(runs, drive, label, cycles, budget_s, clock=None):
     """(s to the end of cycle 0, s of the cycles after it, engine runs in those); each
     cycle's time printed as it ends; no further cycle once budget_s is spent (the rate is
     then of the cycles done)."""
     t0 = time.perf_counter()
     drive(runs, lambda r: r.run(stop_after=1))
     t1 = time.perf_counter()
-    print(f"[{label}] cycle 0: {t1 - t0:.1f} s", flush=True)
+    print(f"[{label}] cycle 0: {t1 - t0:.1f} s{split(clock)}", flush=True)
     before = sum(r.engine_runs for r in runs)
     for k in range(1, 1 + cycles):
         tk = time.perf_counter()
         drive(runs, lambda r: r.run(stop_after=1))
-        print(f"[{label}] cycle {k}: {time.perf_counter() - tk:.1f} s", flush=True)
+        print(f"[{label}] cycle {k}: {time.perf_counter() - tk:.1f} s{split(clock)}", flush=True)
         if time.perf_counter() - t0 > budget_s:
             print(f"[{label}] stopped after cycle {k}: --budget {budget_s:g} s spent", flush=True)
             break
     return t1 - t0, time.perf_counter() - t1, sum(r.engine_runs for r in runs) - before
+
+
+def split(clock):
+    """'; hosts 1.2 s, ...' of the batch's drive since the last call (then cleared)."""
+    if not clock:
+        return ""
+    out = "; " + ", ".join(f"{k} {v:.2f} s" for k, v in clock.items() if not k.endswith("_n"))
+    out += f"; {clock.get('advance_n', 0)} advances, {clock.get('export_n', 0)} halts"
+    clock.clear()
+    return out
 
 
 def one_by_one(runs, job):
@@ -167,8 +177,9 @@ def main(argv=None):
                               str(path)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                              text=True, env=env)
     runs = copies(path, a, a.batch)
+    clock = {}
     gpu = report("gpu", runs, a, *timed(runs, lambda rs, job: run_batched(
-        rs, job, check_every=a.check_every), "gpu", a.cycles, a.budget))
+        rs, job, check_every=a.check_every, clock=clock), "gpu", a.cycles, a.budget, clock))
     try:                    # the CPU's cycle 0 can outlast the GPU's cycles by far
         out, _ = child.communicate(timeout=None if a.budget == float("inf") else a.budget)
     except subprocess.TimeoutExpired:

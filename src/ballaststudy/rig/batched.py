@@ -15,13 +15,15 @@ not seen by the batch, so a run that asks for more (a callback, another Control)
 refused with ``BatchError``.
 """
 import threading
+import time
 
 from ..dem.gpu import Batch, BatchError
 
 
 class _Driver:
-    def __init__(self, runs, check_every):
+    def __init__(self, runs, check_every, clock):
         self.runs = runs
+        self.clock = clock       # seconds per phase of the drive, and its counts
         self.sims = [r.rig.sim for r in runs]
         self.check_every = int(check_every)
         self.cond = threading.Condition()
@@ -65,6 +67,7 @@ class _Driver:
                    for b in range(len(self.runs))) and not self.woken
 
     def drive(self):
+        tick = _Ticks(self.clock)
         while True:
             with self.cond:
                 self.cond.wait_for(self._all_waiting)
@@ -72,11 +75,15 @@ class _Driver:
                     return
                 asked = dict(self.pending)
                 self.pending.clear()
+            tick("hosts")                    # the runs' own code, between their engine runs
             for n, cases in _grouped(asked).items():
                 self.batch.start(cases, n, self.sims)
             self.stepping.update(asked)
+            tick("start")
             halted = self.batch.advance(self.check_every)
+            tick("advance")                  # the device stepping, until some case halts
             self.batch.to_simulations(self.sims, list(halted)).to_controls(list(halted))
+            tick("export", len(halted))
             with self.cond:
                 self.stepping.difference_update(halted)
                 self.woken.update(halted)
@@ -88,6 +95,23 @@ class _Driver:
             self.cond.notify_all()
 
 
+class _Ticks:
+    """Adds the seconds since its last call to ``clock[phase]`` (and ``n`` to
+    ``clock[phase + "_n"]``); a None clock costs nothing."""
+
+    def __init__(self, clock):
+        self.clock = clock
+        self.t = time.perf_counter()
+
+    def __call__(self, phase, n=1):
+        if self.clock is None:
+            return
+        t = time.perf_counter()
+        self.clock[phase] = self.clock.get(phase, 0.0) + t - self.t
+        self.clock[phase + "_n"] = self.clock.get(phase + "_n", 0) + n
+        self.t = t
+
+
 def _grouped(asked):
     """{steps: [cases]} of the pending requests."""
     out = {}
@@ -96,15 +120,17 @@ def _grouped(asked):
     return out
 
 
-def run_batched(runs, job=lambda run: run.run(), check_every=100):
+def run_batched(runs, job=lambda run: run.run(), check_every=100, clock=None):
     """Run ``job(run)`` (default ``run.run()``: all its cycles) for every run of ``runs``
     (``CyclicRun`` s of one contact law, their rigs' simulations built) with their
     engines stepped as one GPU batch; returns the runs. A run that raised is re-raised
     after the others finished (the first, naming its case). ``check_every``: steps
     between the host's looks for halted cases; a halted case idles until the next look
     (the biaxial rig halts every ~1600 steps in real time: 100 idles it ~3 %, for one
-    small copy of B flags per look)."""
-    d = _Driver(runs, check_every)
+    small copy of B flags per look). ``clock``: a dict that gets the drive's seconds per
+    phase (hosts: the runs' own code; start; advance: the device stepping; export: the
+    halted cases written back) and their counts (export_n: halts), summed over calls."""
+    d = _Driver(runs, check_every, clock)
     for b, sim in enumerate(d.sims):
         sim.run = d.engine_run(b)            # the instance's, over Simulation.run
     threads = [threading.Thread(target=d.work, args=(b, job), daemon=True)

@@ -57,11 +57,18 @@ def test_runs_driven_together_keep_their_records(beds):
     has them alone on the CPU."""
     sims = [copy.deepcopy(beds[0]), copy.deepcopy(beds[1])]
     alone = [wall_cycles(copy.deepcopy(s), 3, f) for s, f in zip(sims, (None, 4.0))]
+    engine_runs = []
     for r in alone:
+        run = r.rig.sim.run
+        r.rig.sim.run = lambda *a, run=run, **k: (engine_runs.append(1), run(*a, **k))[1]
         r.run()
+    clock = {}
     together = run_batched([wall_cycles(s, 3, f) for s, f in zip(sims, (None, 4.0))],
-                           check_every=4)
+                           check_every=4, clock=clock)
     assert sims[1].dt == 4.0 * beds[1].dt
+    assert clock["export_n"] == len(engine_runs)      # one halt per engine run
+    assert 1 <= clock["advance_n"] <= len(engine_runs)
+    assert all(clock[k] >= 0.0 for k in ("hosts", "start", "advance", "export"))
     for a, t in zip(alone, together):
         assert t.s.phase == "done" and t.s.cycle == 3
         assert t.samples["step"] == a.samples["step"]
