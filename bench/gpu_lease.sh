@@ -20,6 +20,11 @@ export PYTHONUNBUFFERED=1
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
     --target /tmp/site .whl/*.whl || exit 1
 export PYTHONPATH=/tmp/site:$PWD/src
+if ! python3 -c "import numpy; numpy.row_stack" 2>/dev/null; then   # numpy 2.5 dropped it;
+    mkdir -p /tmp/shim                                               # some numba use it
+    printf 'import numpy\nnumpy.row_stack = numpy.vstack\n' > /tmp/shim/sitecustomize.py
+    export PYTHONPATH=/tmp/shim:$PYTHONPATH
+fi
 nvidia-smi --query-gpu=name,memory.total,driver_version,clocks.sm,clocks.max.sm --format=csv
 python3 -c "import sys, numpy, numba; from importlib.metadata import version as v
 print('python', sys.version.split()[0], 'numpy', numpy.__version__, 'numba', numba.__version__,
