@@ -16,7 +16,7 @@
 set -u
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
-export PYTHONUNBUFFERED=1
+export PYTHONUNBUFFERED=1 NUMBA_CUDA_LOW_OCCUPANCY_WARNINGS=0
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
     --target /tmp/site .whl/*.whl || exit 1
 export PYTHONPATH=/tmp/site:$PWD/src
@@ -42,17 +42,17 @@ step() {   # step NAME SECONDS COMMAND...: one benchmark, its log under $OUT
     echo "=== $name: rc $rc in $((SECONDS - t0)) s"
 }
 
-step rigs_biaxial 160 python3 bench/gpu_rigs.py --assembled .devcarry/biaxial_full.nc \
-    --batch 100 --cycles 3 --budget 80
-step rigs_box 120 python3 bench/gpu_rigs.py --rig box --config config/thesis.yaml \
-    --assembled .devcarry/box_thesis.nc --batch 160 --cycles 3 --budget 60
-step calibrate_cuda 160 python3 -m ballaststudy.cli calibrate .devcarry/cal/p60_q230_f5.nc \
+step rigs_biaxial 170 python3 bench/gpu_rigs.py --assembled .devcarry/biaxial_full.nc \
+    --batch 100 --cycles 3 --budget 90 --kernels
+step calibrate_cuda 150 python3 -m ballaststudy.cli calibrate .devcarry/cal/p60_q230_f5.nc \
     --conditions .devcarry/cal/p60_q230_f5.yaml --specimens .devcarry/cal/case0.nc \
     .devcarry/cal/case1.nc .devcarry/cal/case2.nc --out-dir "$OUT/cal_cuda" --backend cuda \
     --config .devcarry/cal.yaml
 (cd "$OUT/cal_cuda" 2>/dev/null && tar czf "$OUT/cal_cuda.tgz" evaluations.nc summary.md \
-    calibrated.yaml && rm -rf "$OUT/cal_cuda")
-step ensemble 80 python3 bench/gpu_ensemble.py --batches 1,100,1000 --steps 500 \
+    calibrated.yaml; rm -rf "$OUT/cal_cuda")
+step rigs_box 100 python3 bench/gpu_rigs.py --rig box --config config/thesis.yaml \
+    --assembled .devcarry/box_thesis.nc --batch 160 --cycles 6 --budget 50 --kernels
+step ensemble 70 python3 bench/gpu_ensemble.py --batches 1,100,1000 --steps 500 \
     --cpu-steps 1000 --check-steps 300 --bonded-batches 100
-step tests_real_gpu 50 env BALLASTSTUDY_TEST_GPU=real python3 -m pytest tests/dem/gpu -q -n 4 \
-    -p no:cacheprovider
+step tests_real_gpu 50 env BALLASTSTUDY_TEST_GPU=real python3 -m pytest tests/dem/gpu -q -n 8 \
+    -p no:cacheprovider --tb=line -rfE

@@ -47,6 +47,8 @@ def arguments(argv=None):
     ap.add_argument("--deviator-max", type=float, default=80.0, metavar="KPA")
     ap.add_argument("--first-loading-inertial-number", type=float, default=1.35e-4)
     ap.add_argument("--check-every", type=int, default=100)
+    ap.add_argument("--kernels", action="store_true",
+                    help="then one more cycle with each kernel timed alone")
     ap.add_argument("--budget", type=float, default=float("inf"), metavar="S",
                     help="no further cycle once S seconds are spent (each of GPU and CPU)")
     ap.add_argument("--config", default="config/config.yaml")
@@ -97,7 +99,7 @@ def copies(path, a, n):
         if a.rig == "biaxial":
             p.mode, p.frequency_Hz, p.deviator_max_kPa = "real_time", a.frequency, a.deviator_max
             p.first_loading_inertial_number = a.first_loading_inertial_number
-        run = run_class(rig, cycles=1 + a.cycles)
+        run = run_class(rig, cycles=2 + a.cycles)    # a spare: breakdown's
         run.engine_runs = 0
         advance = run.advance
 
@@ -110,22 +112,26 @@ def copies(path, a, n):
 
 
 def timed(runs, drive, label, cycles, budget_s, clock=None):
-    """(s to the end of cycle 0, s of the cycles after it, engine runs in those); each
-    cycle's time printed as it ends; no further cycle once budget_s is spent (the rate is
-    then of the cycles done)."""
+    """(s to the end of cycle 0, s of the cycles timed, their number, engine runs in
+    those). Cycle 0 in one drive, cycle 1 in another (its time says how many more of
+    --cycles fit in budget_s), the rest in one drive: the rate is of that last drive,
+    whose batch is made once as a calibration's is (or of cycle 1 where none fit)."""
     t0 = time.perf_counter()
     drive(runs, lambda r: r.run(stop_after=1))
     t1 = time.perf_counter()
     print(f"[{label}] cycle 0: {t1 - t0:.1f} s{split(clock)}", flush=True)
-    before = sum(r.engine_runs for r in runs)
-    for k in range(1, 1 + cycles):
-        tk = time.perf_counter()
-        drive(runs, lambda r: r.run(stop_after=1))
-        print(f"[{label}] cycle {k}: {time.perf_counter() - tk:.1f} s{split(clock)}", flush=True)
-        if time.perf_counter() - t0 > budget_s:
-            print(f"[{label}] stopped after cycle {k}: --budget {budget_s:g} s spent", flush=True)
-            break
-    return t1 - t0, time.perf_counter() - t1, sum(r.engine_runs for r in runs) - before
+    e1 = sum(r.engine_runs for r in runs)
+    drive(runs, lambda r: r.run(stop_after=1))
+    t2 = time.perf_counter()
+    print(f"[{label}] cycle 1: {t2 - t1:.1f} s{split(clock)}", flush=True)
+    e2 = sum(r.engine_runs for r in runs)
+    more = min(cycles - 1, int((budget_s - (t2 - t0)) / (t2 - t1)))
+    if more < 1:
+        return t1 - t0, t2 - t1, 1, e2 - e1
+    drive(runs, lambda r: r.run(stop_after=more))
+    t3 = time.perf_counter()
+    print(f"[{label}] cycles 2-{1 + more}: {t3 - t2:.1f} s{split(clock)}", flush=True)
+    return t1 - t0, t3 - t2, more, sum(r.engine_runs for r in runs) - e2
 
 
 def split(clock):
@@ -143,16 +149,29 @@ def one_by_one(runs, job):
         job(r)
 
 
-def report(label, runs, a, t0, tc, engine_runs):
-    done = min(len(r.s.rows) for r in runs) - 1          # cycles after cycle 0
+def report(label, runs, a, t0, tc, n_cycles, engine_runs):
     failed = [r.s.failure for r in runs if getattr(r.s, "failure", None)]
-    print(f"[{label}] B={len(runs)}: cycle 0 {t0:.1f} s; {done} cycles {tc:.1f} s; "
-          f"engine runs per case and cycle {engine_runs / max(len(runs) * done, 1):.0f}; "
+    print(f"[{label}] B={len(runs)}: cycle 0 {t0:.1f} s; {n_cycles} cycles {tc:.1f} s; "
+          f"engine runs per case and cycle {engine_runs / (len(runs) * n_cycles):.0f}; "
           f"failed {len(failed)}{': ' + failed[0] if failed else ''}", flush=True)
     key = "axial_strain" if a.rig == "biaxial" else "settlement"
-    print(f"[{label}] copy 0 {key} after each cycle: "
-          f"{[round(r.get(key, float('nan')), 5) for r in runs[0].s.rows]}", flush=True)
-    return tc / done * 1000 / 60 if done > 0 else float("nan")
+    values = ", ".join(f"{r.get(key, float('nan')):.4g}" for r in runs[0].s.rows)
+    print(f"[{label}] copy 0 {key} after each cycle: {values}", flush=True)
+    return tc / n_cycles * 1000 / 60
+
+
+def breakdown(runs, a):
+    """One more cycle with each kernel timed alone (the device synchronised around each
+    launch, so slower than the cycles above): where the device's time goes."""
+    from ballaststudy.rig.batched import run_batched
+    kernels, clock = {}, {}
+    t = time.perf_counter()
+    run_batched(runs, lambda r: r.run(stop_after=1), check_every=a.check_every, clock=clock,
+                kernels=kernels)
+    print(f"[gpu] one cycle, each kernel synchronised: {time.perf_counter() - t:.1f} s"
+          f"{split(clock)}; kernels: "
+          + ", ".join(f"{k} {v:.2f} s" for k, v in sorted(kernels.items(), key=lambda kv: -kv[1])),
+          flush=True)
 
 
 def main(argv=None):
@@ -180,6 +199,8 @@ def main(argv=None):
     clock = {}
     gpu = report("gpu", runs, a, *timed(runs, lambda rs, job: run_batched(
         rs, job, check_every=a.check_every, clock=clock), "gpu", a.cycles, a.budget, clock))
+    if a.kernels:
+        breakdown(runs, a)
     try:                    # the CPU's cycle 0 can outlast the GPU's cycles by far
         out, _ = child.communicate(timeout=None if a.budget == float("inf") else a.budget)
     except subprocess.TimeoutExpired:

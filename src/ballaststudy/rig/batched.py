@@ -120,7 +120,7 @@ def _grouped(asked):
     return out
 
 
-def run_batched(runs, job=lambda run: run.run(), check_every=100, clock=None):
+def run_batched(runs, job=lambda run: run.run(), check_every=100, clock=None, kernels=None):
     """Run ``job(run)`` (default ``run.run()``: all its cycles) for every run of ``runs``
     (``CyclicRun`` s of one contact law, their rigs' simulations built) with their
     engines stepped as one GPU batch; returns the runs. A run that raised is re-raised
@@ -129,8 +129,11 @@ def run_batched(runs, job=lambda run: run.run(), check_every=100, clock=None):
     (the biaxial rig halts every ~1600 steps in real time: 100 idles it ~3 %, for one
     small copy of B flags per look). ``clock``: a dict that gets the drive's seconds per
     phase (hosts: the runs' own code; start; advance: the device stepping; export: the
-    halted cases written back) and their counts (export_n: halts), summed over calls."""
+    halted cases written back) and their counts (export_n: halts), summed over calls.
+    ``kernels``: a dict that gets each kernel's seconds, the device synchronised around
+    every launch (slower: a benchmark's breakdown, Batch.timer)."""
     d = _Driver(runs, check_every, clock)
+    d.batch.timer = kernels
     for b, sim in enumerate(d.sims):
         sim.run = d.engine_run(b)            # the instance's, over Simulation.run
     threads = [threading.Thread(target=d.work, args=(b, job), daemon=True)

@@ -58,6 +58,15 @@ def cuda_available():
         return False
 
 
+def _rows(arr, lo, hi):
+    """A host copy of the device array's rows lo:hi; none without a device slice, which
+    numba-cuda refuses on an empty array (a batch without clumps, on a GPU: its simulator
+    allows it)."""
+    if hi <= lo:
+        return np.empty((0,) + arr.shape[1:], arr.dtype)
+    return arr[lo:hi].copy_to_host()
+
+
 def _check(sim, k):
     if sim.prm[P.DT] <= 0.0:
         raise BatchError(f"case {k}: no dt (prepare the Simulation)")
@@ -100,6 +109,7 @@ class Batch:
         self._log_exported = np.zeros(n_cases, np.int64)    # log's entries, exported
         self._remaining = np.zeros(n_cases, np.int64)   # launches a running case may need
         self._started = []            # cases started since the last advance
+        self.whole_export_from = max(2, n_cases // 8)   # cases exported at once: whole arrays
         self._controls = host.pop("controls")
         self._control_dims = host["cdim"].copy()
         self._offsets = host.pop("offsets")
@@ -306,7 +316,7 @@ class Batch:
     def case_arrays(self, b, *names):
         """Host copies of the named per-ball arrays of case b."""
         lo, hi = self._offsets[b], self._offsets[b + 1]
-        return [self.d[n][lo:hi].copy_to_host() for n in names]
+        return [_rows(self.d[n], lo, hi) for n in names]
 
     def to_controls(self, cases=None):
         """Write the device's state of the controllers into the ``Control`` s the batch was
@@ -383,11 +393,15 @@ class Batch:
         joints (state, the breakages since the case's last export), clumps, and the
         contacts with their history as the CPU's Verlet lists. Their step and time advance
         by the steps they ran since their last export. Only each case's own rows cross
-        to the host (a halted case's export costs the same whatever B)."""
+        to the host (a halted case's export costs the same whatever B: ~85 transfers),
+        unless ``whole_export_from`` cases or more are exported at once: then each array
+        crosses whole, once (~30 transfers for all of them)."""
         clock = self.d["clock"].copy_to_host()
         n_log = int(self.d["logn"].copy_to_host()[0])
-        for b in range(self.n_cases) if cases is None else cases:
-            s, h = sims[b], self._case_rows(b, n_log)
+        cases = range(self.n_cases) if cases is None else cases
+        whole = self._whole() if len(cases) >= self.whole_export_from else None
+        for b in cases:
+            s, h = sims[b], self._case_rows(b, n_log, whole)
             s.balls.pos[:] = h["pos"]
             s.balls.vel[:] = h["vend"]
             s.balls.omega[:] = h["wend"]
@@ -410,24 +424,43 @@ class Batch:
         self.steps = 0
         return self
 
-    def _case_rows(self, b, n_log):
+    def _whole(self):
+        """Host copies of every device array an export reads, each in one transfer."""
+        keys = (*BALL_ROWS, *SEGMENT_ROWS, *CLUMP_ROWS, "prm", "nb", "wl", "nh", "wh",
+                *(BOND_ROWS if self._bond_offsets[-1] > 0 else ()))
+        return {k: (self.d[k].copy_to_host() if self.d[k].size else
+                    np.empty(self.d[k].shape, self.d[k].dtype)) for k in keys}
+
+    def _case_rows(self, b, n_log, whole=None):
         """Host copies of case b's rows of the device arrays (its balls', segments',
-        clumps' and flat joints' ranges, its list slots, the log since its last export)."""
+        clumps' and flat joints' ranges, its list slots, the log since its last export),
+        from the device or from ``whole`` (``_whole``'s copies)."""
         d = self.d
         lo, hi = self._offsets[b], self._offsets[b + 1]
         w0, w1 = self._wall_offsets[b], self._wall_offsets[b + 1]
         c0, c1 = self._clump_offsets[b], self._clump_offsets[b + 1]
         q0, q1 = self._bond_offsets[b], self._bond_offsets[b + 1]
         n = self.n_balls
-        h = {k: d[k][lo:hi].copy_to_host() for k in BALL_ROWS}
-        h.update({k: d[k][w0:w1].copy_to_host() for k in SEGMENT_ROWS})
-        h.update({k: d[k][c0:c1].copy_to_host() for k in CLUMP_ROWS})
-        h.update({k: d[k][0, q0:q1].copy_to_host() for k in BOND_ROWS if q1 > q0})
-        h["prm"] = d["prm"][b].copy_to_host()
-        for k, slots in (("nb", MAX_NEIGHBOURS), ("wl", MAX_WALLS)):     # slot-major
-            h[k] = np.array([d[k][q, lo:hi].copy_to_host() for q in range(slots)])
-        for k, slots in (("nh", MAX_NEIGHBOURS), ("wh", MAX_WALLS)):     # rows q n + i
-            h[k] = np.array([d[k][q * n + lo:q * n + hi].copy_to_host() for q in range(slots)])
+        if whole is not None:
+            h = {k: whole[k][lo:hi] for k in BALL_ROWS}
+            h.update({k: whole[k][w0:w1] for k in SEGMENT_ROWS})
+            h.update({k: whole[k][c0:c1] for k in CLUMP_ROWS})
+            h.update({k: whole[k][0, q0:q1] for k in BOND_ROWS if q1 > q0})
+            h["prm"] = whole["prm"][b]
+            h.update({k: whole[k][:, lo:hi] for k in ("nb", "wl")})
+            for k, slots in (("nh", MAX_NEIGHBOURS), ("wh", MAX_WALLS)):
+                h[k] = whole[k].reshape(slots, n, *whole[k].shape[1:])[:, lo:hi]
+        else:
+            h = {k: _rows(d[k], lo, hi) for k in BALL_ROWS}
+            h.update({k: _rows(d[k], w0, w1) for k in SEGMENT_ROWS})
+            h.update({k: _rows(d[k], c0, c1) for k in CLUMP_ROWS})
+            h.update({k: d[k][0, q0:q1].copy_to_host() for k in BOND_ROWS if q1 > q0})
+            h["prm"] = d["prm"][b].copy_to_host()
+            for k, slots in (("nb", MAX_NEIGHBOURS), ("wl", MAX_WALLS)):     # slot-major
+                h[k] = np.array([d[k][q, lo:hi].copy_to_host() for q in range(slots)])
+            for k, slots in (("nh", MAX_NEIGHBOURS), ("wh", MAX_WALLS)):     # rows q n + i
+                h[k] = np.array([d[k][q * n + lo:q * n + hi].copy_to_host()
+                                 for q in range(slots)])
         k0 = self._log_exported[b]
         h["logi"] = d["logi"][k0:n_log].copy_to_host() if n_log > k0 else np.zeros((0, 4), np.int64)
         h["logf"] = d["logf"][k0:n_log].copy_to_host() if n_log > k0 else np.zeros((0, 3))
