@@ -9,6 +9,7 @@
 #               and its three, shapely, trimesh; Python 3.12, manylinux x86-64);
 #   .devcarry/  biaxial_full.nc and box_thesis.nc (bench/gpu_rigs.py --assemble-only: the
 #               full-size biaxial specimen of config.yaml, the box case of thesis.yaml),
+#               their runs after cycle 0 (*_c0.npz: gpu_rigs.py --cycle0-only, on the CPU),
 #               cal.yaml (config.yaml with a calibration of 4 + 1 x 2 sets) and the
 #               calibration's inputs under cal/ (the measured test, its conditions, 3
 #               specimens), as `snakemake` builds them.
@@ -43,7 +44,7 @@ step() {   # step NAME SECONDS COMMAND...: one benchmark, its log under $OUT
 }
 
 step rigs_biaxial 170 python3 bench/gpu_rigs.py --assembled .devcarry/biaxial_full.nc \
-    --batch 100 --cycles 3 --budget 90 --kernels
+    --resume .devcarry/biaxial_full_c0.npz --batch 100 --cycles 3 --budget 100 --kernels
 step calibrate_cuda 150 python3 -m ballaststudy.cli calibrate .devcarry/cal/p60_q230_f5.nc \
     --conditions .devcarry/cal/p60_q230_f5.yaml --specimens .devcarry/cal/case0.nc \
     .devcarry/cal/case1.nc .devcarry/cal/case2.nc --out-dir "$OUT/cal_cuda" --backend cuda \
@@ -51,7 +52,8 @@ step calibrate_cuda 150 python3 -m ballaststudy.cli calibrate .devcarry/cal/p60_
 (cd "$OUT/cal_cuda" 2>/dev/null && tar czf "$OUT/cal_cuda.tgz" evaluations.nc summary.md \
     calibrated.yaml; rm -rf "$OUT/cal_cuda")
 step rigs_box 100 python3 bench/gpu_rigs.py --rig box --config config/thesis.yaml \
-    --assembled .devcarry/box_thesis.nc --batch 160 --cycles 6 --budget 50 --kernels
+    --assembled .devcarry/box_thesis.nc --resume .devcarry/box_thesis_c0.npz --batch 160 \
+    --cycles 6 --budget 50 --kernels
 step ensemble 70 python3 bench/gpu_ensemble.py --batches 1,100,1000 --steps 500 \
     --cpu-steps 1000 --check-steps 300 --bonded-batches 100
 step tests_real_gpu 50 env BALLASTSTUDY_TEST_GPU=real python3 -m pytest tests/dem/gpu -q -n 8 \

@@ -47,6 +47,11 @@ def arguments(argv=None):
     ap.add_argument("--deviator-max", type=float, default=80.0, metavar="KPA")
     ap.add_argument("--first-loading-inertial-number", type=float, default=1.35e-4)
     ap.add_argument("--check-every", type=int, default=100)
+    ap.add_argument("--cycle0-only", metavar="OUT",
+                    help="run one copy's cycle 0 on the CPU, save its checkpoint to OUT and "
+                    "stop (the GPU run's --resume)")
+    ap.add_argument("--resume", metavar="NPZ",
+                    help="copies of the run saved by --cycle0-only (cycle 0 not timed)")
     ap.add_argument("--kernels", action="store_true",
                     help="then one more cycle with each kernel timed alone")
     ap.add_argument("--budget", type=float, default=float("inf"), metavar="S",
@@ -94,12 +99,17 @@ def copies(path, a, n):
     rig_class, run_class, _ = rig_classes(a.rig)
     out = []
     for _ in range(n):
-        rig = rig_class.load(path)
-        p = rig.params
-        if a.rig == "biaxial":
-            p.mode, p.frequency_Hz, p.deviator_max_kPa = "real_time", a.frequency, a.deviator_max
-            p.first_loading_inertial_number = a.first_loading_inertial_number
-        run = run_class(rig, cycles=2 + a.cycles)    # a spare: breakdown's
+        if a.resume:
+            run = run_class.from_checkpoint(a.resume, rig_class, cycles=2 + a.cycles)
+            run.checkpoint = None               # (copies do not write it back)
+        else:
+            rig = rig_class.load(path)
+            p = rig.params
+            if a.rig == "biaxial":
+                p.mode, p.frequency_Hz = "real_time", a.frequency
+                p.deviator_max_kPa = a.deviator_max
+                p.first_loading_inertial_number = a.first_loading_inertial_number
+            run = run_class(rig, cycles=2 + a.cycles)    # a spare: breakdown's
         run.engine_runs = 0
         advance = run.advance
 
@@ -117,9 +127,12 @@ def timed(runs, drive, label, cycles, budget_s, clock=None):
     --cycles fit in budget_s), the rest in one drive: the rate is of that last drive,
     whose batch is made once as a calibration's is (or of cycle 1 where none fit)."""
     t0 = time.perf_counter()
-    drive(runs, lambda r: r.run(stop_after=1))
+    if runs[0].s.cycle == 0:
+        drive(runs, lambda r: r.run(stop_after=1))
+        print(f"[{label}] cycle 0: {time.perf_counter() - t0:.1f} s{split(clock)}", flush=True)
+    else:
+        print(f"[{label}] cycle 0: done, from --resume", flush=True)
     t1 = time.perf_counter()
-    print(f"[{label}] cycle 0: {t1 - t0:.1f} s{split(clock)}", flush=True)
     e1 = sum(r.engine_runs for r in runs)
     drive(runs, lambda r: r.run(stop_after=1))
     t2 = time.perf_counter()
@@ -183,6 +196,13 @@ def main(argv=None):
         return 0
     if a.assemble_only:
         assembled(a, a.assemble_only)
+        return 0
+    if a.cycle0_only:
+        t = time.perf_counter()
+        (run,) = copies(assembled(a), a, 1)
+        run.run(stop_after=1)
+        run.save_checkpoint(a.cycle0_only)
+        print(f"cycle 0 on the CPU in {time.perf_counter() - t:.0f} s: {a.cycle0_only}")
         return 0
     from ballaststudy.dem.gpu import cuda_available
     from ballaststudy.rig.batched import run_batched

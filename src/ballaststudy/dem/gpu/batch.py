@@ -58,6 +58,10 @@ def cuda_available():
         return False
 
 
+# the controllers' arrays a start sends, in _control_rows' order
+PUSHED = ("ccfg", "cscale", "cctl", "ccpar", "ccst", "cval", "cwsum")
+
+
 def _rows(arr, lo, hi):
     """A host copy of the device array's rows lo:hi; none without a device slice, which
     numba-cuda refuses on an empty array (a batch without clumps, on a GPU: its simulator
@@ -215,14 +219,21 @@ class Batch:
         if busy:
             raise BatchError(f"case(s) {busy} are still running")
         left = self.d["left"].copy_to_host()
+        controlled = [b for b in cases if self._controls[b] is not None]
+        # the controllers' arrays cross whole, once each way, for all the cases started
+        # (a row at a time costs a device view and a transfer per array and case)
+        rows = {k: self.d[k].copy_to_host() for k in PUSHED} if controlled else {}
+        prm = self.d["prm"].copy_to_host() if sims is not None else None
         for b in cases:
             halt[b] = K.RUNNING
             left[b] = n_steps
             self._remaining[b] = n_steps
-            if self._controls[b] is not None:
-                self._push_control(b)
+            if b in controlled:
+                self._control_rows(b, rows)
             if sims is not None:
-                self._push_timestep(b, sims[b])
+                self._push_timestep(b, sims[b], prm[b])
+        for k, v in rows.items():
+            self.d[k].copy_to_device(v)
         self.d["halt"].copy_to_device(halt)
         self.d["left"].copy_to_device(left)
         self._started.extend(cases)
@@ -337,20 +348,18 @@ class Batch:
             a.samp[:n] = h["csamp"][b, :n, :a.samp.shape[1]]
         return self
 
-    def _push_control(self, b):
+    def _control_rows(self, b, rows):
         """Case b's controllers as its host left them (parameters, state, switches, scales,
-        pending velocities, the emptied sample buffer) onto the device."""
+        pending velocities, the emptied sample buffer) into ``rows``, host copies of the
+        device's arrays (``PUSHED``) that ``start`` then sends."""
         a = self._controls[b].arrays
         dim = self._control_dims[b]
         if (len(a.sensors), len(a.ctl)) != (dim[K.N_SENSORS], dim[K.N_CONTROLLERS]):
             raise BatchError(f"case {b}: its controllers were rebuilt since the batch was made")
-        for key, v in (("ccfg", a.cfg), ("cscale", a.scale), ("cctl", a.ctl),
-                       ("ccpar", a.cpar), ("ccst", a.cst), ("cval", a.val), ("cwsum", a.wsum)):
-            row = np.ascontiguousarray(v)
-            if len(row):
-                self.d[key][b, :len(row)] = row
+        for key, v in zip(PUSHED, (a.cfg, a.scale, a.ctl, a.cpar, a.cst, a.val, a.wsum)):
+            rows[key][b, :len(v)] = v
 
-    def _push_timestep(self, b, sim):
+    def _push_timestep(self, b, sim, prm):
         """Case b's dt, density scaling and automatic dt from its simulation, if its host
         changed them (a rig scales its masses for loading): the case rebuilt now with its
         inertial masses (the real ones back if scaling ended) and, with the automatic dt,
@@ -358,9 +367,9 @@ class Batch:
         p = sim.prm
         _check(sim, b)
         keys = [P.DT, P.DSCALE, P.DT_SAFETY, P.AUTO_DT]
-        prm = self.d["prm"][b].copy_to_host()
-        if np.array_equal(prm[keys], p[keys]):
+        if np.array_equal(prm[keys], p[keys]):      # (prm: the device's row of case b)
             return
+        prm = prm.copy()
         lo, hi = self._offsets[b], self._offsets[b + 1]
         if p[P.DSCALE] == 0.0 and prm[P.DSCALE] > 0.0:      # set_density_scaling(None)
             self.d["minv"][lo:hi] = np.ascontiguousarray(sim.balls.minv)
