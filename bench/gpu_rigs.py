@@ -100,7 +100,7 @@ def copies(path, a, n):
     out = []
     for _ in range(n):
         if a.resume:
-            run = run_class.from_checkpoint(a.resume, rig_class, cycles=2 + a.cycles)
+            run = run_class.from_checkpoint(a.resume, cycles=2 + a.cycles)
             run.checkpoint = None               # (copies do not write it back)
         else:
             rig = rig_class.load(path)
