@@ -43,18 +43,18 @@ step() {   # step NAME SECONDS COMMAND...: one benchmark, its log under $OUT
     echo "=== $name: rc $rc in $((SECONDS - t0)) s"
 }
 
-step rigs_biaxial 170 python3 bench/gpu_rigs.py --assembled .devcarry/biaxial_full.nc \
+step rigs_biaxial 160 python3 bench/gpu_rigs.py --assembled .devcarry/biaxial_full.nc \
     --resume .devcarry/biaxial_full_c0.npz --batch 100 --cycles 3 --budget 100 --kernels
-step calibrate_cuda 150 python3 -m ballaststudy.cli calibrate .devcarry/cal/p60_q230_f5.nc \
+step calibrate_cuda 140 python3 -m ballaststudy.cli calibrate .devcarry/cal/p60_q230_f5.nc \
     --conditions .devcarry/cal/p60_q230_f5.yaml --specimens .devcarry/cal/case0.nc \
     .devcarry/cal/case1.nc .devcarry/cal/case2.nc --out-dir "$OUT/cal_cuda" --backend cuda \
     --config .devcarry/cal.yaml
 (cd "$OUT/cal_cuda" 2>/dev/null && tar czf "$OUT/cal_cuda.tgz" evaluations.nc summary.md \
     calibrated.yaml; rm -rf "$OUT/cal_cuda")
-step rigs_box 100 python3 bench/gpu_rigs.py --rig box --config config/thesis.yaml \
+step rigs_box 90 python3 bench/gpu_rigs.py --rig box --config config/thesis.yaml \
     --assembled .devcarry/box_thesis.nc --resume .devcarry/box_thesis_c0.npz --batch 160 \
     --cycles 6 --budget 50 --kernels
 step ensemble 70 python3 bench/gpu_ensemble.py --batches 1,100,1000 --steps 500 \
     --cpu-steps 1000 --check-steps 300 --bonded-batches 100
-step tests_real_gpu 50 env BALLASTSTUDY_TEST_GPU=real python3 -m pytest tests/dem/gpu -q -n 8 \
+step tests_real_gpu 45 env BALLASTSTUDY_TEST_GPU=real python3 -m pytest tests/dem/gpu -q -n 8 \
     -p no:cacheprovider --tb=line -rfE
