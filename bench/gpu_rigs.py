@@ -21,7 +21,14 @@ on the CPU engine (one thread, a subprocess running beside the GPU part:
 run, with tiny settings). ``--rig box``: the box test's case 0 of box_test at the config's
 resolution (thesis.yaml: the thesis-scale study's) copied B times, its static loads and
 cycle 0, then --cycles cycles (the study's 160 cases x 1000 cycles: minutes per 1000
-cycles of B = 160). Never a test.
+cycles of B = 160).
+
+For a lent GPU's minutes (bench/gpu_lease.sh): --assemble-only and --cycle0-only prepare
+the specimen and its run after cycle 0 on the CPU, --assembled/--resume copy them there.
+Cycle 1 is the warm-up (numba's and the GPU's compiles fall in it); the rates are of the
+cycles after it (--budget: as many as fit, at least one). Each GPU drive prints where its
+time went (the hosts' code, starts, device stepping, exports, halts); --kernels adds a
+cycle with each kernel timed alone. Never a test.
 """
 import argparse
 import json
@@ -123,9 +130,10 @@ def copies(path, a, n):
 
 def timed(runs, drive, label, cycles, budget_s, clock=None):
     """(s to the end of cycle 0, s of the cycles timed, their number, engine runs in
-    those). Cycle 0 in one drive, cycle 1 in another (its time says how many more of
-    --cycles fit in budget_s), the rest in one drive: the rate is of that last drive,
-    whose batch is made once as a calibration's is (or of cycle 1 where none fit)."""
+    those). Cycle 0 in one drive, cycle 1 in another (the warm-up: numba's and the GPU's
+    compiles fall in it; its time says how many more of --cycles fit in budget_s, at least
+    one), the rest in one drive: the rate is of that last drive, whose batch is made
+    once, as a calibration's is."""
     t0 = time.perf_counter()
     if runs[0].s.cycle == 0:
         drive(runs, lambda r: r.run(stop_after=1))
@@ -133,14 +141,12 @@ def timed(runs, drive, label, cycles, budget_s, clock=None):
     else:
         print(f"[{label}] cycle 0: done, from --resume", flush=True)
     t1 = time.perf_counter()
-    e1 = sum(r.engine_runs for r in runs)
     drive(runs, lambda r: r.run(stop_after=1))
     t2 = time.perf_counter()
-    print(f"[{label}] cycle 1: {t2 - t1:.1f} s{split(clock)}", flush=True)
+    print(f"[{label}] cycle 1 (warm-up, compiles included): {t2 - t1:.1f} s{split(clock)}",
+          flush=True)
     e2 = sum(r.engine_runs for r in runs)
-    more = min(cycles - 1, int((budget_s - (t2 - t0)) / (t2 - t1)))
-    if more < 1:
-        return t1 - t0, t2 - t1, 1, e2 - e1
+    more = max(1, min(cycles - 1, int((budget_s - (t2 - t0)) / (t2 - t1))))
     drive(runs, lambda r: r.run(stop_after=more))
     t3 = time.perf_counter()
     print(f"[{label}] cycles 2-{1 + more}: {t3 - t2:.1f} s{split(clock)}", flush=True)
