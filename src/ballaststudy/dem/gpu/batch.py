@@ -357,7 +357,8 @@ class Batch:
         if (len(a.sensors), len(a.ctl)) != (dim[K.N_SENSORS], dim[K.N_CONTROLLERS]):
             raise BatchError(f"case {b}: its controllers were rebuilt since the batch was made")
         for key, v in zip(PUSHED, (a.cfg, a.scale, a.ctl, a.cpar, a.cst, a.val, a.wsum)):
-            rows[key][b, :len(v)] = v
+            if len(v):
+                rows[key][b, :len(v)] = v
 
     def _push_timestep(self, b, sim, prm):
         """Case b's dt, density scaling and automatic dt from its simulation, if its host
