@@ -10,7 +10,8 @@ script closes that gap before a lent GPU's minutes are spent on it:
    of ``Batch._launch`` recorded: the contact law and the numba types of its arguments;
 2. in a fresh process without the simulator, compiles each distinct (law, kernel, types)
    to PTX for compute capability --cc with numba-cuda's ``compile_ptx`` (its NVVM needs
-   no GPU), and prints one line per kernel: compiled, or the compiler's error.
+   no GPU), and prints one line per kernel: compiled (with ptxas' registers, stack and
+   spills where the toolkit wheel has ptxas), or the compiler's error.
 
 Needs numba-cuda with its toolkit wheels (``pip install -e '.[cuda]'``). Exit 1 if any
 kernel fails to compile. A check that the code compiles, not that it is right: the
@@ -19,6 +20,8 @@ simulator tests say that.
 import argparse
 import os
 import pickle
+import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -98,7 +101,7 @@ def compile_all(path, cc):
         try:
             ptx, _ = cuda.compile_ptx(fn, types, cc=cc)
             print(f"ok   {name} (law {hash(law) & 0xffff:04x}): {len(ptx) // 1024} kB PTX "
-                  f"in {time.perf_counter() - t:.1f} s", flush=True)
+                  f"in {time.perf_counter() - t:.1f} s{resources(ptx, cc)}", flush=True)
         except Exception as exc:
             failed += 1
             msg = str(exc).strip().splitlines()
@@ -106,6 +109,30 @@ def compile_all(path, cc):
                   + "\n     ".join(msg[:40]), flush=True)
     print(f"{len(done)} kernel signatures, {failed} failed to compile for cc {cc}")
     return failed
+
+
+def resources(ptx, cc):
+    """'; registers, stack, spills' as ptxas (the toolkit wheel's, if there) reports
+    them for the kernel: what the occupancy and local-memory traffic will be."""
+    exe = shutil.which("ptxas")
+    try:
+        from nvidia import cuda_nvcc
+        exe = exe or str(Path(cuda_nvcc.__path__[0]) / "bin" / "ptxas")
+    except ImportError:
+        pass
+    if not exe or not Path(exe).exists():
+        return ""
+    with tempfile.NamedTemporaryFile("w", suffix=".ptx") as f:
+        f.write(ptx)
+        f.flush()
+        out = subprocess.run([exe, f"-arch=sm_{cc[0]}{cc[1]}", "-v", f.name, "-o", os.devnull],
+                             capture_output=True, text=True).stderr
+    regs = re.search(r"Used (\d+) registers", out)
+    frame = re.search(r"(\d+) bytes stack frame, (\d+) bytes spill stores, (\d+) bytes spill loads", out)
+    if not regs:
+        return "; ptxas: " + out.strip().splitlines()[-1] if out.strip() else ""
+    return (f"; {regs.group(1)} registers" + (f", stack {frame.group(1)} B, spills "
+            f"{frame.group(2)}/{frame.group(3)} B" if frame else ""))
 
 
 def main(argv=None):
