@@ -1,6 +1,7 @@
 """Batched GPU engine: aggregate throughput of B settle2d cases stepped together.
 
     python bench/gpu_ensemble.py [--n 5000] [--steps 2000] [--batches 1,10,100,1000]
+        [--forces-registers 128,96,64]
         [--cpu-steps 2000] [--check-steps 500]
 
 Needs a CUDA GPU and numba-cuda (``pip install -e '.[cuda]'``); prints one line and exits
@@ -23,7 +24,9 @@ Needs a CUDA GPU and numba-cuda (``pip install -e '.[cuda]'``); prints one line 
    of B independent cases, which is what the throughput counts.
    For B = 1, 100 and 1000, 100 more steps with each kernel timed alone (device
    synchronised before and after it): where the step's time goes.
-5. Where the rigs' figures come from: bench/gpu_rigs.py (the rigs' cycles on the batch).
+5. With --forces-registers: B = 100 and 1000 (and bonded 100) again with the forces
+   kernel's registers capped at each value (occupancy against spills).
+6. Where the rigs' figures come from: bench/gpu_rigs.py (the rigs' cycles on the batch).
 
 The last line is a table. A script that prints numbers, never a test.
 """
@@ -101,14 +104,15 @@ def agreement(steps):
               flush=True)
 
 
-def gpu_throughput(n, steps, batches, phases=(1, 100, 1000), bonded=False):
+def gpu_throughput(n, steps, batches, phases=(1, 100, 1000), bonded=False, registers=None):
     from ballaststudy.dem.gpu import Batch
     from numba import cuda
     rows = []
+    tag = (" bonded" if bonded else "") + (f" cap {registers}" if registers else "")
     for nb in batches:
         sim = build(n, bonded)
         try:
-            batch = Batch.from_simulations([sim] * nb)
+            batch = Batch.from_simulations([sim] * nb, forces_registers=registers)
             batch.run(1)
             cuda.synchronize()
             t0 = time.perf_counter()
@@ -117,15 +121,14 @@ def gpu_throughput(n, steps, batches, phases=(1, 100, 1000), bonded=False):
             t = time.perf_counter() - t0
         except Exception as exc:       # out of memory, a failed case: say so, go on
             print(f"B={nb}: failed: {exc}", flush=True)
-            rows.append((f"{nb}{' bonded' if bonded else ''}", n, steps, float("nan"),
-                         float("nan")))
+            rows.append((f"{nb}{tag}", n, steps, float("nan"), float("nan")))
             continue
         bsps = nb * n * steps / t
         pos = batch.case_arrays(0, "pos")[0]
-        print(f"B={nb}{' bonded' if bonded else ''}: {nb * n} balls, {steps} steps in {t:.3f} s: {bsps:.3g} ball-steps/s "
+        print(f"B={nb}{tag}: {nb * n} balls, {steps} steps in {t:.3f} s: {bsps:.3g} ball-steps/s "
               f"({1e6 * t / steps:.1f} us/step); case 0 mean y {pos[:, 1].mean():.4f} m",
               flush=True)
-        rows.append((f"{nb}{' bonded' if bonded else ''}", n, steps, t, bsps))
+        rows.append((f"{nb}{tag}", n, steps, t, bsps))
         if nb in phases:           # each kernel timed alone (device synchronised around it)
             batch.timer = {}
             batch.run(100, check_every=100)
@@ -142,6 +145,9 @@ def main():
     ap.add_argument("--batches", default="1,10,100,1000")
     ap.add_argument("--bonded-batches", default="100",
                     help="B of the bonded variant (bench/engine_vs_lammps.py's clusters)")
+    ap.add_argument("--forces-registers", default="",
+                    help="caps on a forces thread's registers to time too, e.g. 128,96,64 "
+                    "(B = 100 and 1000, and bonded 100, each)")
     ap.add_argument("--cpu-steps", type=int, default=2000)
     ap.add_argument("--check-steps", type=int, default=500)
     a = ap.parse_args()
@@ -171,6 +177,9 @@ def main():
     rows = gpu_throughput(a.n, a.steps, [int(b) for b in a.batches.split(",")])
     rows += gpu_throughput(a.n, a.steps, [int(b) for b in a.bonded_batches.split(",") if b],
                            phases=(), bonded=True)
+    for cap in (int(r) for r in a.forces_registers.split(",") if r):
+        rows += gpu_throughput(a.n, a.steps, [100, 1000], phases=(), registers=cap)
+        rows += gpu_throughput(a.n, a.steps, [100], phases=(), bonded=True, registers=cap)
     cpu = cpu_reference(proc)
     cpu_bsps = cpu["bsps"] if cpu else float("nan")
     print(f"cpu_engine_one_case_ball_steps_per_s={cpu_bsps:.3g} (n={a.n}, {a.cpu_steps} steps, "

@@ -100,7 +100,7 @@ class _Prepared:
 class Batch:
     """B cases on the GPU; see the module docstring."""
 
-    def __init__(self, law, host, n_cases, grid_cells, max_cell):
+    def __init__(self, law, host, n_cases, grid_cells, max_cell, forces_registers=None):
         self.law = law
         self.n_cases = n_cases
         self.n_balls = host["pos"].shape[0]
@@ -131,7 +131,7 @@ class Batch:
         self._control_args = (d["prm"], d["cpos"], d["cvel"], d["comega"], d["cforce"],
                               d["cmass"], d["cheld"], d["seg"], d["wforce"], d["wvel"],
                               *(d[k] for k in CONTROL_ARRAYS), d["cdim"])
-        self.k = K.kernels(law)
+        self.k = K.kernels(law, forces_registers)
         self.timer = None
         self.prepared = {}            # kernel name -> _Prepared (or None: ordinary launches)
         self._build_lists()           # every case: the lists before the first forces
@@ -141,9 +141,10 @@ class Batch:
                       self.d["cell_n"], self.d["bcell"])
 
     @classmethod
-    def from_simulations(cls, sims, controls=None):
+    def from_simulations(cls, sims, controls=None, forces_registers=None):
         """Copy built simulations (same contact law) into one batch, each with its built
-        ``Control`` (or None) from ``controls``. Every case starts halted."""
+        ``Control`` (or None) from ``controls``. Every case starts halted.
+        ``forces_registers``: kernels.kernels' cap (benchmarks)."""
         if not sims:
             raise BatchError("an empty batch")
         controls = [None] * len(sims) if controls is None else list(controls)
@@ -155,7 +156,7 @@ class Batch:
                 raise BatchError(f"case {k}: another contact law than case 0's")
             _check(s, k)
             s.prepare()
-        return cls(law, *pack(sims, controls))
+        return cls(law, *pack(sims, controls), forces_registers=forces_registers)
 
     def _launch(self, name, n, *args):
         if n <= 0:

@@ -144,15 +144,21 @@ if config.ENABLE_CUDASIM:
 _compiled = {}
 
 
-def kernels(law):
-    """The kernels for the packed contact law ``law`` (compiled once per law)."""
-    if law not in _compiled:
-        _compiled[law] = _make(law)
-    return _compiled[law]
+def kernels(law, forces_registers=None):
+    """The kernels for the packed contact law ``law`` (compiled once per law).
+    ``forces_registers``: a cap on the registers of a ``forces`` thread (ptxas'
+    maxrregcount; uncapped it takes ~168 on sm_90, 3 blocks an SM), for benchmarks that
+    weigh occupancy against spills; no effect under the simulator, which has none."""
+    key = (law, forces_registers)
+    if key not in _compiled:
+        _compiled[key] = _make(law, forces_registers)
+    return _compiled[key]
 
 
-def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time constant)
+def _make(LAW, forces_registers=None):   # noqa: C901 (one closure per law: LAW a constant)
     assert NCOEF == 12
+    capped = cuda.jit if not forces_registers or config.ENABLE_CUDASIM else \
+        cuda.jit(max_registers=int(forces_registers))
     HW = lf(LAW, WIDTH)       # history columns (reset when a contact opens); the
     #                          persistent state after them is kept, as on the CPU
 
@@ -483,7 +489,7 @@ def _make(LAW):   # noqa: C901 (one closure per law: LAW is a compile-time const
             return False, fx, fy, mc - aj * ftot_s
         return False, -fx, -fy, -mc - ai * ftot_s
 
-    @cuda.jit
+    @capped
     def forces(pos, vel, omega, vend, wend, rad, mass, minv, iinv, fix, damp, mat, alive,
                case, fext, force, cfg, coef, nb, nbn, nh, seg, link, wvel, womega, centre, wmat, wl,
                wln, wh, wforce, wmoment, need, cell_n, bcell, bl, bln, bij, bc, bsc,
