@@ -100,8 +100,9 @@ def assembled(a, path=None):
 
 
 def copies(path, a, n):
-    """n runs of the case at path (biaxial: real time), cycle 0 plus --cycles; each counts
-    its engine runs (``run.engine_runs``)."""
+    """n runs of the case at path (biaxial: real time), or of --resume's saved run: cycle
+    0, --cycles and a spare (--kernels' cycle); each counts its engine runs
+    (``run.engine_runs``)."""
     from ballaststudy.rig.kinds import rig_classes
     rig_class, run_class, _ = rig_classes(a.rig)
     out = []
