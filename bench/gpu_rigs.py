@@ -1,7 +1,7 @@
 """Batched GPU engine on the rigs: B cases' cycles as one batch (rig/batched.py), beside
 one case's on the CPU engine in the same run.
 
-    python bench/gpu_rigs.py [--batch 100] [--width 0.3 --height 0.6] [--cycles 2]
+    python bench/gpu_rigs.py [--batch 100] [--width 0.3 --height 0.6] [--cycles 2 (>= 2)]
         [--frequency 20] [--deviator-max 80] [--first-loading-inertial-number 1.35e-4]
         [--check-every 100] [--config config/config.yaml] [--library BPM.nc]
     python bench/gpu_rigs.py --rig box --batch 160 --config config/thesis.yaml --cycles 5
@@ -71,7 +71,10 @@ def arguments(argv=None):
                     help="assemble the specimen on the CPU, save it to OUT and stop (no GPU "
                     "needed: the GPU run's --assembled)")
     ap.add_argument("--specimen", help=argparse.SUPPRESS)      # the CPU child's
-    return ap.parse_args(argv)
+    a = ap.parse_args(argv)
+    if a.cycles < 2:
+        ap.error("--cycles: at least 2 (cycle 1 is the warm-up, the rate is of those after)")
+    return a
 
 
 def assembled(a, path=None):

@@ -62,13 +62,14 @@ def cuda_available():
 PUSHED = ("ccfg", "cscale", "cctl", "ccpar", "ccst", "cval", "cwsum")
 
 
-def _rows(arr, lo, hi):
-    """A host copy of the device array's rows lo:hi; none without a device slice, which
-    numba-cuda refuses on an empty array (a batch without clumps, on a GPU: its simulator
-    allows it)."""
-    if hi <= lo:
-        return np.empty((0,) + arr.shape[1:], arr.dtype)
-    return arr[lo:hi].copy_to_host()
+def _to_host(arr, lo=0, hi=None):
+    """A host copy of the device array's rows lo:hi (default all). An empty range or array
+    makes no device slice: numba-cuda refuses one on an empty array (a batch without
+    clumps or joints, on a GPU; its simulator allows it)."""
+    hi = arr.shape[0] if hi is None else hi
+    if hi <= lo or arr.size == 0:
+        return np.empty((max(hi - lo, 0),) + arr.shape[1:], arr.dtype)
+    return (arr if (lo, hi) == (0, arr.shape[0]) else arr[lo:hi]).copy_to_host()
 
 
 def _check(sim, k):
@@ -328,7 +329,7 @@ class Batch:
     def case_arrays(self, b, *names):
         """Host copies of the named per-ball arrays of case b."""
         lo, hi = self._offsets[b], self._offsets[b + 1]
-        return [_rows(self.d[n], lo, hi) for n in names]
+        return [_to_host(self.d[n], lo, hi) for n in names]
 
     def to_controls(self, cases=None):
         """Write the device's state of the controllers into the ``Control`` s the batch was
@@ -439,8 +440,7 @@ class Batch:
         """Host copies of every device array an export reads, each in one transfer."""
         keys = (*BALL_ROWS, *SEGMENT_ROWS, *CLUMP_ROWS, "prm", "nb", "wl", "nh", "wh",
                 *(BOND_ROWS if self._bond_offsets[-1] > 0 else ()))
-        return {k: (self.d[k].copy_to_host() if self.d[k].size else
-                    np.empty(self.d[k].shape, self.d[k].dtype)) for k in keys}
+        return {k: _to_host(self.d[k]) for k in keys}
 
     def _case_rows(self, b, n_log, whole=None):
         """Host copies of case b's rows of the device arrays (its balls', segments',
@@ -462,9 +462,9 @@ class Batch:
             for k, slots in (("nh", MAX_NEIGHBOURS), ("wh", MAX_WALLS)):
                 h[k] = whole[k].reshape(slots, n, *whole[k].shape[1:])[:, lo:hi]
         else:
-            h = {k: _rows(d[k], lo, hi) for k in BALL_ROWS}
-            h.update({k: _rows(d[k], w0, w1) for k in SEGMENT_ROWS})
-            h.update({k: _rows(d[k], c0, c1) for k in CLUMP_ROWS})
+            h = {k: _to_host(d[k], lo, hi) for k in BALL_ROWS}
+            h.update({k: _to_host(d[k], w0, w1) for k in SEGMENT_ROWS})
+            h.update({k: _to_host(d[k], c0, c1) for k in CLUMP_ROWS})
             h.update({k: d[k][0, q0:q1].copy_to_host() for k in BOND_ROWS if q1 > q0})
             h["prm"] = d["prm"][b].copy_to_host()
             for k, slots in (("nb", MAX_NEIGHBOURS), ("wl", MAX_WALLS)):     # slot-major
