@@ -44,7 +44,9 @@ def run_recovery(theta_true, lower, upper, seed):
     """(calibrate result, exact-model posterior) for one measured draw."""
     measured = planted_curve(theta_true) + np.random.default_rng(seed + 1000).normal(0.0, SD, len(N))
     evaluate, calls = planted_model(seed)
-    result = calibrate(evaluate, measured, lower, upper, n_initial=8, iterations=2, batch=4, seed=seed)
+    # the planted cases are independent draws per set (no shared specimens): the normal likelihood
+    result = calibrate(evaluate, measured, lower, upper, n_initial=8, iterations=2, batch=4, seed=seed,
+                       shared_cases=False)
     assert calls == [8, 4, 4]
     assert result.thetas.shape == (16, len(lower)) and len(result.curves) == 16
     np.testing.assert_array_equal(result.rounds, [0] * 8 + [1] * 4 + [2] * 4)
@@ -73,8 +75,10 @@ def test_calibrate_recovers_planted_parameters(theta_true, seed):
     result, exact = run_recovery(theta_true, LOWER_AB, UPPER_AB, seed)
     assert_recovered(result.posterior, exact, theta_true, LOWER_AB, UPPER_AB, dims=[0, 1])
     means, pooled = ensemble_stats(result.curves)
-    assert np.all((pooled > SD ** 2 / 2) & (pooled < SD ** 2 * 2))
-    np.testing.assert_allclose(result.noise_var, pooled * (1 + 1 / K))
+    assert np.all((np.diag(pooled) > SD ** 2 / 2) & (np.diag(pooled) < SD ** 2 * 2))
+    # shrinking keeps the diagonal: the residual variance is the pooled case variance x (1 + 1/K)
+    np.testing.assert_allclose(np.diag(result.noise[0]), np.diag(pooled) * (1 + 1 / K))
+    assert list(result.noise) == [0] and result.dof is None
     # the surrogate reproduces the ensemble means it was fitted on to about their scatter
     assert rmse(result.surrogate.predict(result.thetas)[0], means) < SD
 
@@ -157,7 +161,8 @@ def test_ensemble_stats_hand_computed():
     single = np.array([[100.0, 100.0]])                      # one case: no information on scatter
     means, pooled = ensemble_stats([set1, single, set2])
     np.testing.assert_allclose(means, [[2.0, 12.0], [100.0, 100.0], [3.0, 1.0]])
-    np.testing.assert_allclose(pooled, [20.0 / 3.0, 14.0 / 3.0])
+    # cross products: set1 (-1)(-2) + (1)(2) = 4, set2 (-3)(-1) + 0 + (3)(-1) = 0
+    np.testing.assert_allclose(pooled, [[20.0 / 3.0, 4.0 / 3.0], [4.0 / 3.0, 14.0 / 3.0]])
     with pytest.raises(ValueError, match="K >= 2"):
         ensemble_stats([single, single])
     with pytest.raises(ValueError, match="finite"):
@@ -227,3 +232,26 @@ def test_next_batch():
 def distances_between(points):
     d = np.linalg.norm(points[:, None] - points[None], axis=2)
     return d[np.triu_indices(len(points), 1)]
+
+
+def test_two_tests_each_predicted_from_the_other():
+    """Two measured tests of the same parameters (the second at 1.5x the first's stress:
+    its curve 1.5x as large): per-test blocks in the likelihood, and leave one condition out
+    predicts each test from the other's posterior within a few case sd, each fold's
+    parameters near the planted ones."""
+    rng = np.random.default_rng(8)
+    theta_true = np.array([1.7, 1.2])
+
+    def two(theta):
+        return np.concatenate([planted_curve(theta), 1.5 * planted_curve(theta)])
+    point_test = np.repeat([0, 1], len(N))
+    y = two(theta_true) + rng.normal(0.0, SD, 2 * len(N))
+    result = calibrate(lambda thetas: [two(t) + rng.normal(0.0, SD, (K, 2 * len(N))) for t in thetas], y,
+                       LOWER_AB, UPPER_AB, n_initial=8, iterations=2, batch=4, seed=3,
+                       point_test=point_test, shared_cases=False)
+    assert sorted(result.noise) == [0, 1] and all(c.shape == (len(N), len(N)) for c in result.noise.values())
+    assert result.posterior.test_loglik.shape == (len(result.posterior.samples), 2)
+    held = result.held_out(y, point_test)
+    for t in (0, 1):
+        assert held.rmse(y, point_test, [t]) < 3 * SD
+        assert np.all(np.abs(held.theta_mean[t] - theta_true) < 0.15 * (UPPER_AB - LOWER_AB)), held.theta_mean

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from ballaststudy.calibration.bayes import initial_design
-from ballaststudy.loop.select import (ALPHA, SHRINK, chaos_covariance, choose, fit_all, held_out_candidate, held_out_plain,
+from ballaststudy.calibration.bayes import SHRINK
+from ballaststudy.loop.select import (ALPHA, chaos_covariance, choose, fit_all, held_out_candidate, held_out_plain,
                                       residual_covariances, scatter_mse)
 
 TESTS = 7

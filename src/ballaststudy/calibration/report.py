@@ -141,6 +141,7 @@ def summary_markdown(path, target, names, post, s):
                f"Every parameter constrained (90 % interval within {100 * CONSTRAINED:.0f} % of its prior range).")
     better = "better" if s["rmse_after"] < s["rmse_before"] else "not better"
     corr = ", ".join(f"{k} {v:+.2f}" for k, v in s["correlation"].items()) or "-"
+    held = _held_out_table(s.get("held_out"))
     text = f"""# Calibration against {target}
 
 Quantity: {s['quantity']} at the {s['points']} measured points with N <= {s['cycles']} (the simulated
@@ -158,12 +159,28 @@ Posterior correlation: {corr}. Effective sample size {post.ess:.0f} of {len(post
 RMSE of the ensemble mean vs the measured points: **{s['rmse_before']:.4g}** with Table 4.2,
 **{s['rmse_after']:.4g}** with the posterior mean (both from DEM runs, not the surrogate):
 {better} than Table 4.2 on these points.
-
+{held}
 DEM cases run: {s['dem_cases']} ({s['sets']} parameter sets x {s['cases']}); failed specimens:
 {s['failed_cases']} (their curves censored at the failure strain).
 """
     with atomic_path(path) as tmp:
         tmp.write_text(text)
+
+
+def _held_out_table(held):
+    """Leave one condition out, with two or more targets: each test's RMSE under Table 4.2 and
+    as predicted from the other tests' posterior."""
+    if not held:
+        return ""
+    rows = "\n".join(f"| {t} | {v['rmse_before']:.4g} | {v['rmse_held_out']:.4g} |" for t, v in held.items())
+    return f"""
+Leave one condition out (each test predicted by the surrogate from the posterior of the
+others; a test it cannot predict from them is not constrained by them):
+
+| held-out test | RMSE Table 4.2 | RMSE held out |
+|---|---|---|
+{rows}
+"""
 
 
 def _save(fig, path):

@@ -15,7 +15,7 @@ sets, a candidate whose sets scatter little gained 1e5 nats over a plain model h
 that narrow noise, and one whose sets make specimens fail drowned every gain: found with
 bench/loop_undeclared.py). The points of a curve are correlated (a specimen is softer or
 stiffer all along): independent points would count one specimen's offset many times over.
-Covariances are shrunk towards their diagonal (SHRINK) so that they stay positive definite
+Covariances are shrunk towards their diagonal (calibration.bayes.shrunk) so that they stay positive definite
 with few cases.
 
   a lab test (specimen_share > 0): the measured specimen scatters like share x one model
@@ -62,40 +62,18 @@ lot at the high end, and that spread alone keeps z below 2 with a handful of tes
 every single test is better predicted. The signed-rank test asks what we mean - better
 held-out prediction, condition after condition - and needs at least 6 tests to reach
 0.05 / 3 (all 7 positive: p = 1/128)."""
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.special import logsumexp
-from scipy.stats import qmc, wilcoxon
+from scipy.stats import wilcoxon
 
-from ..calibration.bayes import Surrogate, _box, _from_unit, rmse, weighted_quantile
+from ..calibration.bayes import (HeldOut, Surrogate, _box, ensemble_stats, held_out, noise_covariances, per_test_loglik, prior_samples, shrunk,
+                                 weighted_quantile)
 
-SHRINK = 0.1          # weight of the diagonal in the shrunk case covariance
 ALPHA = 0.05          # family-wise level of the rule over the candidates
 # a per-test gain below half a nat (a Bayes factor under 1.65, "not worth more than a bare
 # mention" on Jeffreys' scale) is a tie: an effect that changes nothing must not win on
 # round-off (its runs equal the plain model's and every gain is ~1e-13)
 GAIN_TIE = 0.5
-
-
-def _shrunk(cov):
-    return (1 - SHRINK) * cov + SHRINK * np.diag(np.diag(cov))
-
-
-def case_covariance(curves, point_test, test):
-    """(P_t, P_t) case-to-case covariance of test ``test``'s points in one ensemble (K, P),
-    shrunk towards its diagonal."""
-    if len(curves) < 2:
-        raise ValueError("fewer than 2 cases: the case-to-case covariance is unknown")
-    return _shrunk(np.atleast_2d(np.cov(np.asarray(curves)[:, np.asarray(point_test) == test], rowvar=False)))
-
-
-def _mvn_logpdf(r, cov):
-    """log N(r; 0, cov) for r (M, P) and cov (M, P, P) or (P, P)."""
-    chol = np.linalg.cholesky(cov)
-    z = np.linalg.solve(chol, r[..., None])[..., 0]
-    logdet = 2 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(axis=-1)
-    return -0.5 * (np.sum(z ** 2, axis=-1) + logdet + r.shape[-1] * np.log(2 * np.pi))
 
 
 def chaos_covariance(runs, probe, point_test, test):
@@ -108,7 +86,7 @@ def chaos_covariance(runs, probe, point_test, test):
     runs = np.asarray(runs)
     draws = np.concatenate([runs[None], np.asarray(probe).reshape(-1, *runs.shape)])[:, :, sel]
     dev = (draws - draws.mean(axis=0)).reshape(-1, sel.sum())
-    return _shrunk(dev.T @ dev / (len(runs) * (len(draws) - 1)))
+    return shrunk(dev.T @ dev / (len(runs) * (len(draws) - 1)))
 
 
 def residual_covariances(plain, point_test, measurement_var, specimen_share=1.0, probe=None):
@@ -121,38 +99,17 @@ def residual_covariances(plain, point_test, measurement_var, specimen_share=1.0,
     k = len(plain)
     if specimen_share == 0 and probe is None:
         raise ValueError("specimen_share 0 (the model's own specimens) needs the chaos probe's runs")
+    if specimen_share > 0:
+        if k < 2:
+            raise ValueError("fewer than 2 cases: the case-to-case covariance is unknown")
+        covs = noise_covariances(ensemble_stats([plain])[1], point_test, specimen_share + 1.0 / k, measurement_var)
+        return covs, dict(covs)
     covs, plain_covs = {}, {}
     for t in np.unique(point_test):
-        if specimen_share == 0:
-            chaos = chaos_covariance(plain, probe, point_test, t) / k
-            covs[t] = chaos + measurement_var * np.eye(len(chaos))
-            plain_covs[t] = covs[t] + chaos
-        else:
-            case = case_covariance(plain, point_test, t)
-            covs[t] = plain_covs[t] = (specimen_share + 1.0 / k) * case + measurement_var * np.eye(len(case))
+        chaos = chaos_covariance(plain, probe, point_test, t) / k
+        covs[t] = chaos + measurement_var * np.eye(len(chaos))
+        plain_covs[t] = covs[t] + chaos
     return covs, plain_covs
-
-
-def per_test_loglik(mean, sd, y, point_test, covs):
-    """(M, T) log-likelihood of each test's points for M surrogate predictions."""
-    out = []
-    for t, cov in covs.items():
-        sel = np.asarray(point_test) == t
-        full = cov[None] + np.eye(sel.sum())[None] * (sd[:, sel] ** 2)[:, :, None]
-        out.append(_mvn_logpdf(y[sel][None] - mean[:, sel], full))
-    return np.array(out).T
-
-
-@dataclass(frozen=True)
-class HeldOut:
-    """Leave-one-condition-out result of one model over T tests."""
-    lpd: np.ndarray          # (T,) held-out log predictive density per test
-    predicted: np.ndarray    # (P,) each point's held-out prediction (its test left out)
-    theta_mean: np.ndarray   # (T, d) posterior mean of each fold (empty for the plain model)
-
-    def rmse(self, y, point_test, tests=None):
-        sel = np.isin(point_test, np.unique(point_test) if tests is None else tests)
-        return rmse(np.asarray(y)[sel], self.predicted[sel])
 
 
 def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed):
@@ -160,24 +117,9 @@ def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, 
     lower, upper = _box(lower, upper)
     surrogate = Surrogate(lower, upper, seed).fit(thetas, [c.mean(axis=0) for c in curves_list],
                                                   groups=point_test)      # one GP per test
-    exponent = max(int(np.ceil(np.log2(n_samples))), 0)
-    samples = _from_unit(qmc.Sobol(len(lower), rng=seed).random_base2(exponent), lower, upper)
+    samples = prior_samples(lower, upper, n_samples, seed)
     mean, sd = surrogate.predict(samples)
     return samples, mean, per_test_loglik(mean, sd, np.asarray(y, float), point_test, covs)
-
-
-def _held_out(samples, mean, loglik, y, point_test):
-    tests = np.unique(point_test)
-    lpd, predicted, theta_mean = np.empty(len(tests)), np.empty(len(y)), np.empty((len(tests), samples.shape[1]))
-    for j, t in enumerate(tests):
-        log_w = loglik[:, np.arange(len(tests)) != j].sum(axis=1)
-        log_w -= logsumexp(log_w)
-        lpd[j] = logsumexp(log_w + loglik[:, j])
-        w = np.exp(log_w)
-        sel = point_test == t
-        predicted[sel] = w @ mean[:, sel]
-        theta_mean[j] = w @ samples
-    return HeldOut(lpd, predicted, theta_mean)
 
 
 def _fit(samples, loglik):
@@ -191,7 +133,7 @@ def judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_sa
     """(held_out_candidate, fit_all) of a candidate from one surrogate fit."""
     y, point_test = np.asarray(y, float), np.asarray(point_test)
     samples, mean, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed)
-    return _held_out(samples, mean, loglik, y, point_test), _fit(samples, loglik)
+    return held_out(samples, mean, loglik, y, point_test), _fit(samples, loglik)
 
 
 def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):

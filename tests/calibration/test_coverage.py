@@ -1,0 +1,107 @@
+"""Coverage of the calibration's 90 % intervals when the measured specimen is not one of ours
+(issue 34): a planted model whose specimens differ by an offset that runs along the whole
+curve (a specimen softer or stiffer all along, as DEM specimens are), K specimens shared by
+every parameter set (common random numbers, as the Evaluator runs them), small chaos per
+run, and a "measured" curve from a fresh specimen. Counted over many draws, the intervals
+must hold the planted values about 90 % of the time; the independent-points likelihood the
+calibration used before, given the same runs, does not (the failure this guards against).
+
+The likelihood alone is tested on many draws with the exact model mean (no surrogate, so
+the count measures the likelihood); the whole calibrate() with its surrogate on fewer.
+"""
+import numpy as np
+
+from ballaststudy.calibration.bayes import (calibrate, ensemble_stats, noise_covariances, posterior,
+                                            shrunk)
+
+N = np.array([1.0, 2.0, 5.0, 10.0, 20.0, 50.0])
+LOWER, UPPER = np.array([0.5, 0.0]), np.array([3.0, 2.0])
+SHAPE = 0.5 + 0.5 * np.log1p(N) / np.log1p(N[-1])   # a specimen's offset grows with N
+OFFSET_SD, CHAOS_SD = 0.004, 0.0005                   # between specimens, between runs
+K, SETS = 3, 12
+
+
+def planted_curve(theta):
+    """Compaction a and creep rate b (test_bayes' planted model)."""
+    a, b = theta[0], theta[1]
+    return 0.02 * a * (1.0 - np.exp(-N / 3.0)) + 0.001 * b * N + 0.002 * a * b
+
+
+class ShiftedExact:
+    """The exact ensemble-mean curve of the K shared specimens: truth + their mean offset."""
+    def __init__(self, offset):
+        self.offset = offset
+
+    def predict(self, thetas):
+        return (np.array([planted_curve(t) for t in thetas]) + self.offset,
+                np.zeros((len(thetas), len(N))))
+
+
+def draw(seed):
+    """(theta_true, measured y, specimen offsets (K, P), rng) for one planted draw."""
+    rng = np.random.default_rng(seed)
+    theta = LOWER + (0.2 + 0.6 * rng.random(2)) * (UPPER - LOWER)
+    offsets = rng.normal(0.0, OFFSET_SD, K)[:, None] * SHAPE
+    y = planted_curve(theta) + rng.normal(0.0, OFFSET_SD) * SHAPE + rng.normal(0.0, CHAOS_SD, N.size)
+    return theta, y, offsets, rng
+
+
+def covered(post, theta):
+    return (post.interval90[:, 0] <= theta) & (theta <= post.interval90[:, 1])
+
+
+def likelihood_coverage(draws):
+    """(coverage per parameter of the calibration's likelihood, of independent points)."""
+    hits, independent = np.zeros(2), np.zeros(2)
+    for seed in range(draws):
+        theta, y, offsets, rng = draw(seed)
+        runs = [offsets + rng.normal(0.0, CHAOS_SD, offsets.shape) for _ in range(SETS)]
+        case_cov = ensemble_stats(runs)[1]
+        model = ShiftedExact(offsets.mean(axis=0))
+        noise = noise_covariances(case_cov, np.zeros(N.size, int), 1.0 + 1.0 / K)
+        hits += covered(posterior(model, y, noise, LOWER, UPPER, 4096, seed, dof=K - 1), theta)
+        diagonal = np.diag(case_cov) * (1.0 + 1.0 / K)
+        independent += covered(posterior(model, y, diagonal, LOWER, UPPER, 4096, seed), theta)
+    return hits / draws, independent / draws
+
+
+def test_intervals_cover_planted_values_on_fresh_specimens():
+    """200 draws (binomial sd of a 90 % count: 2 %). Measured 2026-11-27: t likelihood
+    0.885 / 0.995 (a / b), independent points 0.67 / 1.00. b, the slope, over-covers under
+    both (the shrunk covariance keeps part of the offset's variance as independent noise);
+    a, which a specimen's offset mimics, is where independent points fail."""
+    hits, independent = likelihood_coverage(200)
+    print(f"\ncoverage a, b: t likelihood {hits}, independent points {independent}")
+    assert np.all(hits >= 0.84), hits
+    assert hits[0] <= 0.97, hits
+    assert independent[0] <= 0.75, independent
+
+
+def test_shrunk_keeps_the_diagonal_and_damps_the_rest():
+    cov = np.array([[4.0, 2.0], [2.0, 9.0]])
+    np.testing.assert_allclose(shrunk(cov), [[4.0, 1.8], [1.8, 9.0]])
+
+
+def test_covariances_are_per_test_and_scaled():
+    case_cov = np.arange(16.0).reshape(4, 4) + 20 * np.eye(4)
+    covs = noise_covariances(case_cov, np.array([0, 0, 1, 1]), 2.0, measurement_var=0.5)
+    assert list(covs) == [0, 1]
+    np.testing.assert_allclose(covs[1], 2.0 * shrunk(case_cov[2:, 2:]) + 0.5 * np.eye(2))
+    np.testing.assert_allclose(covs[0], 2.0 * shrunk(case_cov[:2, :2]) + 0.5 * np.eye(2))
+
+
+def test_calibrate_covers_planted_values_on_fresh_specimens():
+    """The whole calibrate() (surrogate, sequential design) over 20 draws: the planted values
+    inside the 90 % intervals in at least 15 of 20 per parameter (a 90 % method fails this
+    1 time in 100). Measured 2026-11-27: 0.85 / 1.00, ~20 s."""
+    hits = np.zeros(2)
+    for seed in range(20):
+        theta, y, offsets, rng = draw(seed)
+
+        def evaluate(thetas):
+            return [planted_curve(t) + offsets + rng.normal(0.0, CHAOS_SD, offsets.shape) for t in thetas]
+        res = calibrate(evaluate, y, LOWER, UPPER, n_initial=8, iterations=2, batch=4, seed=seed,
+                        n_samples=4096)
+        hits += covered(res.posterior, theta)
+    print(f"\ncalibrate() coverage a, b over 20 draws: {hits / 20}")
+    assert np.all(hits >= 15), hits
