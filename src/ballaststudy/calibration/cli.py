@@ -1,8 +1,9 @@
 """`ballaststudy calibrate`: the config's parameters (section ``calibration``) fitted to one
 or more measured tests (thesis 4.3, automated) - triaxial/biaxial tests with the biaxial
-rig, box tests with the box rig (the specimens' kind decides); the tests' points are one
-curve for the likelihood. Box settlement is relative to the first cycle (thesis 4.5.1): a
-measured box curve is compared as given, so give it relative to its first cycle too.
+rig, box tests with the box rig (the specimens' kind decides); the tests are fitted jointly,
+each test's points one block of the likelihood (calibration.bayes). Box settlement is
+relative to the first cycle (thesis 4.5.1): a measured box curve is compared as given, so
+give it relative to its first cycle too.
 
     ballaststudy calibrate results/measured/<t1>.nc [<t2>.nc ...] --conditions
         config/measured/<t1>.yaml [...] --specimens S0.nc S1.nc ... --out-dir
@@ -224,8 +225,8 @@ def _calibrate(args):
     summary["prior_coverage"] = {k: float((b - a) / (hi - lo)) for k, (a, b), lo, hi
                                  in zip(names, res.posterior.interval90, lower, upper)}
     if len(targets) > 1:
-        summary["held_out"] = held_out_rmse(res.held_out(y, point_test), at[before].mean(axis=0), y,
-                                            point_test, targets)
+        summary["held_out"] = held_out_rmse(res.held_out(y, point_test), at[before].mean(axis=0),
+                                            at[-1].mean(axis=0), y, point_test, targets)
     summary["correlation"] = {f"{a}~{b}": float(res.posterior.correlation[i, j])
                               for i, a in enumerate(names) for j, b in enumerate(names) if i < j}
     files = {k: out / k for k in ("evaluations.nc", "posterior.nc", "calibrated.yaml",
@@ -250,11 +251,13 @@ def _calibrate(args):
               f"{summary['rmse_after']:.4g}")
 
 
-def held_out_rmse(held, before, y, point_test, targets):
-    """{target: {rmse_before, rmse_held_out}}: each test against Table 4.2's ensemble mean and
-    against the surrogate's prediction from the posterior of the other tests (leave one
-    condition out; surrogate, not DEM runs, so it shares the surrogate's error)."""
+def held_out_rmse(held, before, after, y, point_test, targets):
+    """{target: {rmse_before, rmse_after, rmse_held_out}}: each test against the ensemble mean
+    with Table 4.2 and with the posterior mean of all tests (DEM runs), and against the
+    surrogate's prediction from the posterior of the other tests (leave one condition out;
+    the surrogate, not DEM runs, so it carries the surrogate's error)."""
     return {t: {"rmse_before": rmse(before[point_test == j], y[point_test == j]),
+                "rmse_after": rmse(after[point_test == j], y[point_test == j]),
                 "rmse_held_out": held.rmse(y, point_test, [j])} for j, t in enumerate(targets)}
 
 
