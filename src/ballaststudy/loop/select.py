@@ -66,8 +66,8 @@ import numpy as np
 from scipy.special import logsumexp
 from scipy.stats import wilcoxon
 
-from ..calibration.bayes import (HeldOut, Surrogate, _box, ensemble_stats, held_out, noise_covariances, per_test_loglik, prior_samples, shrunk,
-                                 weighted_quantile)
+from ..calibration.bayes import (HeldOut, Surrogate, _box, ensemble_stats, held_out, noise_covariances,
+                                 per_test_loglik, prior_samples, shrunk, weighted_quantile)
 
 ALPHA = 0.05          # family-wise level of the rule over the candidates
 # a per-test gain below half a nat (a Bayes factor under 1.65, "not worth more than a bare
