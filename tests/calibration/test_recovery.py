@@ -1,60 +1,51 @@
-"""Recovery on the DEM itself (issue 13's test): a "measured" curve made by the model with
-known F_str_co and mu (not Table 4.2's) on a specimen the calibration never sees, plus a
-digitisation noise, is calibrated back with the biaxial rig on two other specimens: the
-true values lie inside the 90 % intervals, and the friction's interval is narrower than
-its prior. Small scale (synthetic coarse stones, 5 cycles); slow: ~3 min on 2 cores.
-Measured 2026-11-24: 24 DEM cases, mu 90 % [0.72, 1.17] (56 % of the prior; true 0.9),
-F_str_co [1.39, 5.77] (88 %; true 2.0): at this scale the specimen-to-specimen scatter
-(axial strain 0.006 vs 0.034 at the same parameters) leaves F_str_co, which acts only
-through the few bonds that break, nearly unidentified - an honest limit, not a bug."""
+"""Recovery on the DEM itself (issue 13's test, re-planned for issue 34): "measured" curves
+made by the model with known F_str_co and mu (not Table 4.2's) under three conditions, each
+on a fresh specimen the calibration never sees (a laboratory test is a specimen of its
+own), plus a digitisation noise, are calibrated back jointly with the biaxial rig on two
+other specimens (tests/calibration/recovery.py): the true values lie inside the 90 %
+intervals, and the friction's interval is narrower than its prior.
 
+Measured 2026-11-27 (likelihood of calibration.bayes): 78 DEM cases, mu 90 % [0.70, 1.19]
+(62 % of the prior; true 0.9), F_str_co [1.26, 5.75] (90 %; true 2.0); 11 min on 2 cores
+shared with a calibration run (~5 min alone).
+
+Other designs (bench/calibration_recovery.py; calibration specimens seeds 1..K, truths
+101..; one draw each):
+
+| K | conditions | consolidation windows | mu, F_str_co: 90 % interval / prior |
+|---|---|---|---|
+| 2 | 1 | 1000 steps (the other tests') | 89 %, 88 % |
+| 2 | 3 | 1000 steps | 74 %, 82 % |
+| 2 | 1 | 5000 (the config's, as here) | 59 %, 85 % |
+| 2 | 3 | 5000 | 58 %, 79 % |
+| 4 | 1 | 5000 | 83 %, 84 % |
+| 4 | 3 | 5000 | 71 %, 82 % |
+
+The truth was inside every interval. Widths from one draw scatter from 58 to 89 % for mu
+with no order in K or conditions, so this test asserts only "narrower than the prior" (90 %)
+for mu: what the design shows is that F_str_co, acting only through the few bonds that
+break, is not identified at this scale (79-90 % everywhere), and that the lab specimen's
+own offset stays in the residual however many specimens of ours run (covariance
+C (1 + 1/K)). Until 2026-11-27 the test asserted mu < 65 % on one curve with 1000-step
+windows: it passed (56 %) under a likelihood that counted a specimen's offset once per
+point, and failed on main since (86 %; 89 % under the new likelihood)."""
 import numpy as np
 import pytest
 
-from ballaststudy.calibration.bayes import calibrate, rmse
-from ballaststudy.calibration.evaluate import Evaluator
-from ballaststudy.rig.biaxial import BiaxialParams, assemble_biaxial
-from ballaststudy.rig.library import load_library
+from .recovery import LOWER, TRUE, UPPER, recover
 
-TRUE = {"F_str_co": 2.0, "mu": 0.9}
-LOWER, UPPER = np.array([1.0, 0.4]), np.array([6.0, 1.2])
-CYCLES = 5
-ASSEMBLY = dict(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000, fill_area_ratio=0.9)
-
-
-@pytest.fixture(scope="module")
-def setting(small_library, tmp_path_factory, fast_config, planted_conditions):
-    tmp = tmp_path_factory.mktemp("recovery")
-    specimens = []
-    for seed in (7, 8, 9):
-        path = tmp / f"specimen{seed}.nc"
-        assemble_biaxial(load_library(small_library), BiaxialParams(**ASSEMBLY), seed=seed).save(path)
-        specimens.append(path)
-    config = fast_config(tmp)
-    conditions = planted_conditions(tmp / "test.yaml", 200.0, frequency_Hz=5.0)
-    return specimens, config, conditions, tmp
+CONDITIONS_KPA = [(30.0, 200.0), (60.0, 200.0), (30.0, 150.0)]
 
 
 @pytest.mark.slow
-def test_calibration_recovers_known_parameters(setting):
-    specimens, config, conditions, tmp = setting
-    points = np.arange(1.0, CYCLES + 1)
-    names = list(TRUE)
-    truth = Evaluator(names, specimens[2:], [(conditions, points)], config, CYCLES, "axial_strain",
-                      tmp / "truth", jobs=1)
-    y = truth(np.array([list(TRUE.values())]))[0][0]
-    y = y + np.random.default_rng(5).normal(0.0, 5e-4, y.size)     # digitised points
-    evaluate = Evaluator(names, specimens[:2], [(conditions, points)], config, CYCLES, "axial_strain",
-                         tmp / "cal", jobs=2)
-    res = calibrate(evaluate, y, LOWER, UPPER, n_initial=6, iterations=2, batch=3, seed=11,
-                    include=np.array([3.5, 0.7]), measurement_var=(5e-4) ** 2)
-    post = res.posterior
-    cases = len(evaluate.sets) * len(specimens[:2])
-    before = rmse(np.mean(res.curves[0], axis=0), y)
-    print(f"\nrecovery: {cases} DEM cases; true {TRUE}; posterior mean {post.mean.round(3)}; "
-          f"90 % {post.interval90.round(3).tolist()}; ESS {post.ess:.0f}; RMSE Table 4.2 {before:.4g}")
-    for k, name in enumerate(names):
+def test_calibration_recovers_known_parameters(small_library, tmp_path):
+    rec = recover(small_library, tmp_path, calibration_seeds=(7, 8), truth_seeds=(9, 10, 11),
+                  conditions_kPa=CONDITIONS_KPA)
+    post = rec.result.posterior
+    share = (post.interval90[:, 1] - post.interval90[:, 0]) / (UPPER - LOWER)
+    print(f"\nrecovery: {rec.cases} DEM cases; true {TRUE}; posterior mean {post.mean.round(3)}; "
+          f"90 % {post.interval90.round(3).tolist()} ({np.round(100 * share)} % of the prior); ESS {post.ess:.0f}")
+    for k, name in enumerate(TRUE):
         lo, hi = post.interval90[k]
         assert lo <= TRUE[name] <= hi, (name, lo, hi)
-    mu_width = np.diff(post.interval90[1])[0]
-    assert mu_width < 0.65 * (UPPER[1] - LOWER[1]), mu_width
+    assert share[1] < 0.9, share
