@@ -2,9 +2,9 @@
 with the test left out."""
 import numpy as np
 
-from ballaststudy.calibration.bayes import HeldOut
+from ballaststudy.calibration.bayes import HeldOut, posterior
 from ballaststudy.calibration.cli import held_out_rmse
-from ballaststudy.calibration.report import _held_out_table
+from ballaststudy.calibration.report import _held_out_table, summary_markdown
 
 
 def test_held_out_rmse_is_per_test():
@@ -18,3 +18,18 @@ def test_held_out_rmse_is_per_test():
                    "b": {"rmse_before": 1.0, "rmse_after": 0.0, "rmse_held_out": 3.0}}
     table = _held_out_table(out)
     assert "| b | 1 | 0 | 3 |" in table and _held_out_table(None) == ""
+
+
+def test_summary_warns_of_few_specimens_for_several_tests(tmp_path):
+    """Several targets with K < 6 specimens: summary.md says the intervals are too narrow."""
+    class Flat:
+        def predict(self, thetas):
+            return np.zeros((len(thetas), 2)), np.zeros((len(thetas), 2))
+    post = posterior(Flat(), np.zeros(2), np.ones(2), [0.0], [1.0], 64)
+    summary = dict(quantity="axial_strain", points=2, cycles=5, method="m", table_4_2={"mu": 0.7},
+                   prior_coverage={"mu": 0.9}, correlation={}, rmse_before=1.0, rmse_after=0.5, dem_cases=6,
+                   sets=2, failed_cases=0,
+                   held_out={t: {"rmse_before": 1.0, "rmse_after": 0.5, "rmse_held_out": 0.7} for t in "ab"})
+    for cases, warned in ((3, True), (6, False)):
+        summary_markdown(tmp_path / "s.md", "a, b", ["mu"], post, {**summary, "cases": cases})
+        assert ("read the intervals as too narrow" in (tmp_path / "s.md").read_text()) == warned
