@@ -23,7 +23,7 @@ predicts the mean of K: y - surrogate mean has covariance C (1 + 1/K), C the cas
 covariance (plus the measurement's variance on the diagonal). The points of a curve are
 correlated - a specimen is softer or stiffer all along - and independent points count one
 specimen's offset once per point: on planted curves whose specimens differ by such an
-offset, the 90 % intervals from independent points held the truth in ~66 % of draws
+offset, the 90 % intervals from independent points held the truth in 67 % of draws
 (tests/calibration/test_coverage.py). Between tests the residuals are independent (a lab
 test is a specimen of its own), so the covariance is per test. C is shrunk towards its
 diagonal (SHRINK) so that it stays positive definite with few cases.
@@ -342,8 +342,8 @@ def _evaluate(evaluate, thetas):
 def _update(thetas, curves, y, point_test, lower, upper, measurement_var, shared_cases, n_samples, seed):
     """(noise, dof, surrogate, posterior) from all sets evaluated so far (module doc)."""
     means, case_cov = ensemble_stats(curves)
-    noise = noise_covariances(case_cov, point_test, 1.0 + np.mean([1.0 / len(c) for c in curves]),
-                                 measurement_var)
+    scale = 1.0 + np.mean([1.0 / len(c) for c in curves])
+    noise = noise_covariances(case_cov, point_test, scale, measurement_var)
     dof = min(len(c) for c in curves) - 1.0 if shared_cases else None
     surrogate = Surrogate(lower, upper, seed).fit(thetas, means)
     return noise, dof, surrogate, posterior(surrogate, y, noise, lower, upper, n_samples, seed, point_test, dof)
