@@ -15,8 +15,8 @@ sets, a candidate whose sets scatter little gained 1e5 nats over a plain model h
 that narrow noise, and one whose sets make specimens fail drowned every gain: found with
 bench/loop_undeclared.py). The points of a curve are correlated (a specimen is softer or
 stiffer all along): independent points would count one specimen's offset many times over.
-Covariances are shrunk towards their diagonal (calibration.bayes.shrunk) so that they stay positive definite
-with few cases.
+Covariances are shrunk towards their diagonal (calibration.bayes.shrunk) so that they stay
+positive definite with few cases.
 
   a lab test (specimen_share > 0): the measured specimen scatters like share x one model
       specimen, and the ensemble mean misses the model's own mean by 1/K of that:
