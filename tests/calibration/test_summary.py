@@ -27,9 +27,12 @@ def test_summary_warns_of_few_specimens_for_several_tests(tmp_path):
             return np.zeros((len(thetas), 2)), np.zeros((len(thetas), 2))
     post = posterior(Flat(), np.zeros(2), np.ones(2), [0.0], [1.0], 64)
     summary = dict(quantity="axial_strain", points=2, cycles=5, method="m", table_4_2={"mu": 0.7},
-                   prior_coverage={"mu": 0.9}, correlation={}, rmse_before=1.0, rmse_after=0.5, dem_cases=6,
+                   prior_coverage={"mu": 0.9}, correlation={}, rmse_before=1.0, rmse_after=0.5, dem_cases=12,
+                   targets=["a", "b"],
                    sets=2, failed_cases=0,
                    held_out={t: {"rmse_before": 1.0, "rmse_after": 0.5, "rmse_held_out": 0.7} for t in "ab"})
     for cases, warned in ((3, True), (6, False)):
         summary_markdown(tmp_path / "s.md", "a, b", ["mu"], post, {**summary, "cases": cases})
-        assert ("read the intervals as too narrow" in (tmp_path / "s.md").read_text()) == warned
+        text = (tmp_path / "s.md").read_text()
+        assert ("read the intervals as too narrow" in text) == warned
+        assert "DEM cases run: 12 (2 parameter sets x 2 tests x" in text

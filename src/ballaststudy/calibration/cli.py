@@ -219,14 +219,15 @@ def _calibrate(args):
         targets=targets, quantity=cal["quantity"], cycles=cal["cycles"], cases=cal["cases"],
         points=int(points.size), method=METHOD, table_4_2=table,
         rmse_before=rmse(at[before].mean(axis=0), y), rmse_after=rmse(at[-1].mean(axis=0), y),
-        dem_cases=len(evaluate.sets) * cal["cases"], sets=len(evaluate.sets),
+        dem_cases=len(evaluate.sets) * len(targets) * cal["cases"], sets=len(evaluate.sets),
         failed_cases=int(ds["failed"].sum()), ess=float(res.posterior.ess),
         minutes=round((time.time() - t0) / 60, 1))
     summary["prior_coverage"] = {k: float((b - a) / (hi - lo)) for k, (a, b), lo, hi
                                  in zip(names, res.posterior.interval90, lower, upper)}
     if len(targets) > 1:
+        tests = [f"{Path(m).parent.name}/{Path(m).stem}" for m in args.measured]
         summary["held_out"] = held_out_rmse(res.held_out(y, point_test), at[before].mean(axis=0),
-                                            at[-1].mean(axis=0), y, point_test, targets)
+                                            at[-1].mean(axis=0), y, point_test, tests)
     summary["correlation"] = {f"{a}~{b}": float(res.posterior.correlation[i, j])
                               for i, a in enumerate(names) for j, b in enumerate(names) if i < j}
     files = {k: out / k for k in ("evaluations.nc", "posterior.nc", "calibrated.yaml",

@@ -167,7 +167,7 @@ RMSE of the ensemble mean vs the measured points: **{s['rmse_before']:.4g}** wit
 **{s['rmse_after']:.4g}** with the posterior mean (both from DEM runs, not the surrogate):
 {better} than Table 4.2 on these points.
 {held}
-DEM cases run: {s['dem_cases']} ({s['sets']} parameter sets x {s['cases']}); failed specimens:
+DEM cases run: {s['dem_cases']} ({s['sets']} parameter sets x {len(s['targets'])} tests x {s['cases']}); failed specimens:
 {s['failed_cases']} (their curves censored at the failure strain).
 """
     with atomic_path(path) as tmp:
