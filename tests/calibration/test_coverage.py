@@ -11,8 +11,10 @@ the count measures the likelihood); the whole calibrate() with its surrogate on 
 """
 import numpy as np
 
+from scipy.stats import multivariate_normal, multivariate_t
+
 from ballaststudy.calibration.bayes import (calibrate, ensemble_stats, noise_covariances, posterior,
-                                            shrunk)
+                                            residual_logpdf, shrunk)
 
 N = np.array([1.0, 2.0, 5.0, 10.0, 20.0, 50.0])
 LOWER, UPPER = np.array([0.5, 0.0]), np.array([3.0, 2.0])
@@ -150,3 +152,16 @@ def test_joint_tests_need_more_specimens():
     print(f"\njoint coverage over 4 tests: K = 3 {few:.3f}, K = 6 {enough:.3f}")
     assert enough >= 0.85, enough
     assert few < enough - 0.05, (few, enough)
+
+
+def test_residual_logpdf_is_the_normal_and_the_multivariate_t():
+    """Against scipy: the normal, and the t with dof degrees of freedom and scale matrix cov
+    (a factor 2 or pi in the t's normalisation, or dof in place of dof + P, would show)."""
+    rng = np.random.default_rng(2)
+    a = rng.normal(size=(4, 4))
+    cov = a @ a.T + 0.5 * np.eye(4)
+    r = rng.normal(size=(5, 4)) * 2.0
+    np.testing.assert_allclose(residual_logpdf(r, cov), multivariate_normal(np.zeros(4), cov).logpdf(r), rtol=1e-10)
+    for dof in (1.0, 2.0, 7.5):
+        np.testing.assert_allclose(residual_logpdf(r, cov, dof), multivariate_t(np.zeros(4), cov, df=dof).logpdf(r),
+                                   rtol=1e-10)

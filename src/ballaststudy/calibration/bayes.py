@@ -225,15 +225,12 @@ def weighted_quantile(values, weights, q):
     return np.interp(q, (np.cumsum(w) - 0.5 * w) / w.sum(), v)
 
 
-def _summary(samples, log_weights):
-    """(weights, mean, interval90, correlation, ess) of an importance-weighted sample."""
+def weighted_fit(samples, log_weights):
+    """(weights, mean (d,), 90 % interval (d, 2), effective sample size) of prior samples
+    (M, d) weighted by exp(log_weights) (any offset)."""
     weights = np.exp(log_weights - logsumexp(log_weights))
-    mean = weights @ samples
-    centred = samples - mean
-    cov = (weights[:, None] * centred).T @ centred
-    sd_post = np.sqrt(np.diag(cov))
     interval90 = np.array([weighted_quantile(s, weights, [0.05, 0.95]) for s in samples.T])
-    return weights, mean, interval90, cov / np.outer(sd_post, sd_post), float(1.0 / np.sum(weights ** 2))
+    return weights, weights @ samples, interval90, float(1.0 / np.sum(weights ** 2))
 
 
 def prior_samples(lower, upper, n_samples, seed):
@@ -262,8 +259,11 @@ def posterior(surrogate, y, noise, lower, upper, n_samples=20000, seed=0, point_
     test_loglik = per_test_loglik(mu, sd, y, point_test, noise, dof)
     loglik = test_loglik.sum(axis=1)
     log_weights = loglik - logsumexp(loglik)
-    weights, mean, interval90, correlation, ess = _summary(samples, log_weights)
-    return Posterior(samples, log_weights, weights, mean, interval90, correlation, ess,
+    weights, mean, interval90, ess = weighted_fit(samples, log_weights)
+    centred = samples - mean
+    cov = (weights[:, None] * centred).T @ centred
+    sd_post = np.sqrt(np.diag(cov))
+    return Posterior(samples, log_weights, weights, mean, interval90, cov / np.outer(sd_post, sd_post), ess,
                      samples[np.argmax(weights)], test_loglik)
 
 

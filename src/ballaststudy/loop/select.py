@@ -63,11 +63,10 @@ every single test is better predicted. The signed-rank test asks what we mean - 
 held-out prediction, condition after condition - and needs at least 6 tests to reach
 0.05 / 3 (all 7 positive: p = 1/128)."""
 import numpy as np
-from scipy.special import logsumexp
 from scipy.stats import wilcoxon
 
 from ..calibration.bayes import (HeldOut, Surrogate, _box, ensemble_stats, held_out, noise_covariances,
-                                 per_test_loglik, prior_samples, shrunk, weighted_quantile)
+                                 per_test_loglik, prior_samples, shrunk, weighted_fit)
 
 ALPHA = 0.05          # family-wise level of the rule over the candidates
 # a per-test gain below half a nat (a Bayes factor under 1.65, "not worth more than a bare
@@ -123,10 +122,7 @@ def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, 
 
 
 def _fit(samples, loglik):
-    log_w = loglik.sum(axis=1)
-    w = np.exp(log_w - logsumexp(log_w))
-    interval = np.array([weighted_quantile(s, w, [0.05, 0.95]) for s in samples.T])
-    return w @ samples, interval, float(1.0 / np.sum(w ** 2))
+    return weighted_fit(samples, loglik.sum(axis=1))[1:]
 
 
 def judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0):
