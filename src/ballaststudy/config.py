@@ -67,6 +67,7 @@ def check_domain(cfg, file):
         raise ConfigError(file, "rig.box.loading.static_loads_kN", f"{loads} must increase step by step")
     check_rolling(cfg, file)
     check_specimen_sets(cfg, file)
+    check_stress_mapping(cfg, file)
     return cfg
 
 
@@ -161,3 +162,27 @@ def database_seed(study_seed, name, definition):
     if definition.get("seed") is not None:
         return int(definition["seed"])
     return job_seed(study_seed, name)
+
+
+def check_stress_mapping(cfg, file):
+    """The ``stress_mapping`` section's checks across keys (the schema checks each value):
+    ConfigError naming file and key. Returns the section, ``kind`` filled."""
+    sec = dict(cfg.get("stress_mapping") or {})
+    sec.setdefault("kind", "none")
+    if sec["kind"] == "none":
+        return sec
+    env = sec.get("lab_envelope") or {}
+    key = "stress_mapping.lab_envelope"
+    if not (env.get("citation") or "").strip():
+        raise ConfigError(file, f"{key}.citation", f"empty; {sec['kind']} needs the envelope's "
+                          "source (large triaxial tests on the material)")
+    p, q = env.get("confining_pressure_kPa") or [], env.get("peak_deviator_kPa") or []
+    if not p:
+        raise ConfigError(file, f"{key}.confining_pressure_kPa", "empty; allowed: one or more "
+                          "confining pressures [kPa], increasing")
+    if len(q) != len(p):
+        raise ConfigError(file, f"{key}.peak_deviator_kPa", f"{len(q)} values; allowed: one per "
+                          f"confining_pressure_kPa ({len(p)})")
+    if any(b <= a for a, b in zip(p, p[1:])):
+        raise ConfigError(file, f"{key}.confining_pressure_kPa", f"{p}: must increase")
+    return sec

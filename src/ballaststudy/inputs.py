@@ -55,6 +55,8 @@ KINDS = {
     "horizon": Kind("a long-term horizon table", "ballaststudy horizon",
                     ("median_abs_error", "stated_abs_error", "chosen_law"), dims=("law", "fit_cycles")),
     "forms": Kind("a form database", "ballaststudy forms generate", ("a", "b", "c", "mass")),
+    "envelope": Kind("a strength envelope", "ballaststudy case envelope", ("q_peak_mean", "peak_reached"),
+                     dims=("confining_pressure", "case")),
     "metrics": Kind("a case's metrics.nc", "ballaststudy case run", dims=("cycle",)),
     "strength": Kind("a strength test", "ballaststudy case strength", ("deviator_stress", "axial_strain"),
                      attrs=("q_peak", "confining_pressure_Pa", "case")),

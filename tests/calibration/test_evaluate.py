@@ -85,7 +85,7 @@ def test_curve_at_measured_points_in_ln_n():
 
 
 def _key(specimen, values, cycles=5, conditions=None):
-    rig = conditioned_rig("biaxial", {}, conditions)
+    rig, _ = conditioned_rig("biaxial", {}, conditions)
     return scenario("biaxial", [specimen], rig, cycles, material_modifiers(values), conditions).key
 
 

@@ -19,6 +19,7 @@ rule calibrate:
         measured=[f"{RESULTS}/measured/{t}.nc" for t in CAL_TARGETS],
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in CAL_TARGETS],
         specimens=specimen_files("calibration"),
+        envelope=mapping_input("calibration") if CAL_KIND == "biaxial" else [],
     output:
         yaml=f"{CAL_OUT}/calibrated.yaml",
         nc=f"{CAL_OUT}/evaluations.nc",
@@ -33,10 +34,12 @@ rule calibrate:
         out_dir=CAL_OUT,
         config=CONFIG_FILE,
         backend=config["backend"],
+        mapping=mapping_option("calibration") if CAL_KIND == "biaxial" else "",
+        mapping_settings=trigger("stress_mapping"),
     threads: 256      # Snakemake caps it at --cores (workflow.cores breaks snakemake --report)
     log:
         f"{RESULTS}/logs/calibration/calibrate.log",
     shell:
         "ballaststudy calibrate {input.measured} --conditions {input.conditions} "
         "--specimens {input.specimens} --out-dir {params.out_dir} --jobs {threads} "
-        "--backend {params.backend} --config {params.config} --quiet > {log} 2>&1"
+        "--backend {params.backend} {params.mapping} --config {params.config} --quiet > {log} 2>&1"

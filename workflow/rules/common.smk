@@ -45,3 +45,19 @@ def specimen_files(stage):
     if s["rig"] == "box":
         return [f"{RESULTS}/cases/{s['database']}/case{k}/assembled.nc" for k in range(sec["cases"])]
     return [f"{RESULTS}/specimens/{name}/case{k}.nc" for k in range(sec["cases"])]
+
+
+# The stress mapping (config stress_mapping, scenario/mapping.py): strength_ratio reads the
+# strength envelope of the specimen set a stage runs (strength.smk); none reads nothing.
+MAPPED = (config.get("stress_mapping") or {}).get("kind", "none") != "none"
+
+
+def mapping_input(stage):
+    """The strength envelope a stage's stress mapping reads: its set's; [] for none."""
+    return [f"{RESULTS}/strength/{section(stage)['specimens']}/envelope.nc"] if MAPPED else []
+
+
+def mapping_option(stage):
+    """The stage's command-line option for it ("" for none)."""
+    files = mapping_input(stage)
+    return f"--strength-envelope {files[0]}" if files else ""

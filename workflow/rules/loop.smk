@@ -41,6 +41,7 @@ rule loop:
         specimens=specimen_files("loop"),
         parameters=[f"{CAL_OUT}/calibrated.yaml"] if LOOP_CALIBRATED else [],
         horizon=f"{RESULTS}/horizon/horizon.nc",
+        envelope=mapping_input("loop"),
     output:
         md=report(f"{RESULTS}/loop/report.md", caption="../report/loop.rst", category="Loop"),
         nc=f"{RESULTS}/loop/loop.nc",
@@ -53,10 +54,12 @@ rule loop:
         parameters=f"--parameters {CAL_OUT}/calibrated.yaml" if LOOP_CALIBRATED else "",
         config=CONFIG_FILE,
         backend=config["backend"],
+        mapping=mapping_option("loop"),
+        mapping_settings=trigger("stress_mapping"),
     threads: 256      # Snakemake caps it at --cores
     log:
         f"{RESULTS}/logs/loop/loop.log",
     shell:
         "ballaststudy loop {input.measured} --conditions {input.conditions} --specimens "
         "{input.specimens} {params.parameters} --horizon {input.horizon} --out-dir {RESULTS}/loop --jobs {threads} "
-        "--backend {params.backend} --config {params.config} --quiet > {log} 2>&1"
+        "--backend {params.backend} {params.mapping} --config {params.config} --quiet > {log} 2>&1"

@@ -57,6 +57,7 @@ rule measured_sim_run:
     input:
         specimen=lambda wc: SIM_SPECIMENS[int(wc.case)],
         conditions=lambda wc: MEASURED_TESTS_DIR / f"{wc.test}.yaml",
+        envelope=mapping_input("measured.sim"),
     output:
         f"{RESULTS}/measured_sim/cases/{{test}}/case{{case}}.nc",
     params:
@@ -64,12 +65,14 @@ rule measured_sim_run:
         metrics=trigger("metrics"),
         cycles=MEASURED_SIM["cycles"],
         mode=MEASURED_SIM["mode"],
+        mapping=mapping_option("measured.sim"),
+        mapping_settings=trigger("stress_mapping"),
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/measured_sim/{{test}}/case{{case}}.log",
     shell:
         "ballaststudy case run {input.specimen} --cycles {params.cycles} --conditions "
-        "{input.conditions} --mode {params.mode} --config {params.config} --out {output} "
+        "{input.conditions} --mode {params.mode} {params.mapping} --config {params.config} --out {output} "
         "--no-vtk --no-figures --quiet > {log} 2>&1"
 
 

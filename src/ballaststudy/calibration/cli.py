@@ -28,6 +28,7 @@ from ..inputs import input_file, open_netcdf, writable_dir, writable_file
 from ..measured.importer import load_conditions
 from ..provenance import Recorder
 from ..rig.kinds import RUNS_TESTS, kind_for_test, kind_of, rig_classes
+from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import MATERIAL, MODIFIERS, material_parameter
 from ..scenario.runner import BACKENDS, check_backend
 from .bayes import calibrate, rmse
@@ -194,11 +195,14 @@ def _calibrate(args):
     table = {k: MODIFIERS[k].current(rig)[k] for k in names}
     t_before = np.array([table[k] for k in names])
     inside = bool(np.all((t_before >= lower) & (t_before <= upper)))
-    recorder = Recorder("calibrate", inputs=(*args.measured, *args.conditions, args.config, *args.specimens),
-                        params={"calibration": cal}, seed=cfg["seed"])
+    recorder = Recorder("calibrate", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
+                                             *([args.strength_envelope] if args.strength_envelope else [])),
+                        params={"calibration": cal, "stress_mapping": cfg.get("stress_mapping")},
+                        seed=cfg["seed"])
+    mapping = stage_mapping(cfg, args.config, args.strength_envelope, kind)
     evaluate = Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
-                         args.config, cal["cycles"], cal["quantity"], out, jobs=args.jobs,
-                         progress=not args.quiet, backend=args.backend)
+                         cfg, cal["cycles"], cal["quantity"], out, jobs=args.jobs,
+                         progress=not args.quiet, backend=args.backend, mapping=mapping)
     targets = [str(m) for m in args.measured]
     t0 = time.time()
     res = calibrate(evaluate, y, lower, upper, cal["initial_design"], cal["iterations"],
@@ -212,8 +216,11 @@ def _calibrate(args):
     evaluate(res.posterior.mean[None])      # the calibrated set, from DEM runs
     rounds.append(-1)
     before = 0 if inside else len(rounds) - 2
+    mapped = evaluate.mapping_records()
     ds = evaluations_dataset(names, evaluate.sets, rounds, points, point_test, y, cal["cycles"],
-                             cal["quantity"], {"targets": ", ".join(targets), "method": METHOD})
+                             cal["quantity"], {"targets": ", ".join(targets), "method": METHOD,
+                                               "stress_mapping": mapping.kind,
+                                               "stress_mapping_json": json.dumps(mapped)})
     at = ds[cal["quantity"] + "_at_points"].values
     summary = dict(
         targets=targets, quantity=cal["quantity"], cycles=cal["cycles"], cases=cal["cases"],
@@ -221,7 +228,8 @@ def _calibrate(args):
         rmse_before=rmse(at[before].mean(axis=0), y), rmse_after=rmse(at[-1].mean(axis=0), y),
         dem_cases=len(evaluate.sets) * len(targets) * cal["cases"], sets=len(evaluate.sets),
         failed_cases=int(ds["failed"].sum()), ess=float(res.posterior.ess),
-        minutes=round((time.time() - t0) / 60, 1))
+        minutes=round((time.time() - t0) / 60, 1), stress_mapping=mapping.kind,
+        stress_mapping_tests=mapped)
     summary["prior_coverage"] = {k: float((b - a) / (hi - lo)) for k, (a, b), lo, hi
                                  in zip(names, res.posterior.interval90, lower, upper)}
     if len(targets) > 1:
@@ -333,5 +341,7 @@ def target_arguments(c, specimens_help):
     c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
     c.add_argument("--backend", choices=BACKENDS, default="cpu",
                    help="cpu: --jobs processes; cuda: every case in one GPU batch")
+    c.add_argument("--strength-envelope", type=Path, help="the specimens' strength envelope "
+                   "(case envelope), for the config's stress_mapping strength_ratio")
     c.add_argument("--config", default="config/config.yaml", type=Path)
     c.add_argument("--quiet", action="store_true")

@@ -27,13 +27,15 @@ class Evaluator:
 
     def __init__(self, names, specimens, tests, config, cycles, quantity, out_dir, jobs=1,
                  progress=False, effect=None, base=None, perturbation_m_s=0.0, perturbation_seed=0,
-                 backend="cpu"):
+                 backend="cpu", mapping=None):
         """tests: [(conditions YAML, measured N within the cycles)], one per target;
         ``names``: the parameters varied - material ones, or ``effect``'s (a modifier)
         with the material parameters fixed at ``base`` ({name: value}; {}: Table 4.2's);
         ``perturbation_m_s`` > 0: every case starts from its specimen's velocities perturbed
         by that much (Simulation.perturb_velocities, seeded by ``perturbation_seed`` + the
-        case index): the chaos probe of loop.select. ``backend``: run_cases' (cpu, cuda)."""
+        case index): the chaos probe of loop.select. ``backend``: run_cases' (cpu, cuda).
+        ``mapping``: the stress mapping of the tests' q onto the specimens (scenario.mapping;
+        None: none), the same for every set."""
         self.names, self.specimens = list(names), [str(s) for s in specimens]
         self.cycles, self.quantity = int(cycles), quantity
         self.cache, self.jobs, self.progress = Path(out_dir) / "cases", int(jobs), progress
@@ -46,9 +48,10 @@ class Evaluator:
         self.tests = []
         for conditions, points in tests:
             loaded = load_conditions(conditions)
+            rig, record = conditioned_rig(self.kind, cfg.get("rig", {}), loaded, conditions_file=conditions,
+                                          mapping=mapping)
             self.tests.append(dict(conditions=str(conditions), points=np.asarray(points, float), loaded=loaded,
-                                   rig=conditioned_rig(self.kind, cfg.get("rig", {}), loaded,
-                                                       conditions_file=conditions)))
+                                   rig=rig, mapping=record))
         self.effect, self.base = effect, dict(base or {})
         self.perturbation_m_s, self.perturbation_seed = float(perturbation_m_s), int(perturbation_seed)
         self.sets = []
@@ -62,8 +65,14 @@ class Evaluator:
         else:
             modifiers = material_modifiers({**self.base, **values})
         return [scenario(self.kind, self.specimens, t["rig"], self.cycles, modifiers, t["loaded"],
-                         t["conditions"], self.metrics, self.perturbation_m_s, self.perturbation_seed)
+                         t["conditions"], self.metrics, self.perturbation_m_s, self.perturbation_seed,
+                         t["mapping"])
                 for t in self.tests]
+
+    def mapping_records(self):
+        """{test (source/name): its stress mapping's record}."""
+        return {f"{Path(t['conditions']).parent.name}/{Path(t['conditions']).stem}": t["mapping"]
+                for t in self.tests}
 
     def __call__(self, thetas):
         batch = [dict(zip(self.names, map(float, t))) for t in np.atleast_2d(thetas)]

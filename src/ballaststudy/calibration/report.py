@@ -8,6 +8,7 @@ import yaml
 
 from ..atomic import atomic_path
 from ..metrics.output import VARIABLES, display_scale
+from ..scenario.mapping import mapping_markdown
 from ..scenario.modifiers import material_parameter
 
 CF = "CF-1.8"
@@ -161,6 +162,7 @@ every set). Method: {s['method']}.
 
 {verdict}
 
+{mapping_markdown(s.get("stress_mapping_tests") or {})}
 Posterior correlation: {corr}. Effective sample size {post.ess:.0f} of {len(post.weights)}.
 
 RMSE of the ensemble mean vs the measured points: **{s['rmse_before']:.4g}** with Table 4.2,

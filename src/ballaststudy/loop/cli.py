@@ -32,6 +32,7 @@ from ..config import ConfigError, job_seed, load_config
 from ..inputs import open_netcdf, writable_dir
 from ..measured.importer import load_conditions
 from ..provenance import Recorder
+from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import EFFECTS, MODIFIERS, load_material_values
 from ..scenario.runner import check_backend
 from .horizon import chosen_for
@@ -182,15 +183,18 @@ def _loop(args):
     y, point_test = targets.y, targets.point_test
     recorder = Recorder("loop", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
                                         *([args.parameters] if args.parameters else []),
-                                        *([args.horizon] if args.horizon else [])),
-                        params={"loop": lp, "base": base}, seed=cfg["seed"])
+                                        *([args.horizon] if args.horizon else []),
+                                        *([args.strength_envelope] if args.strength_envelope else [])),
+                        params={"loop": lp, "base": base, "stress_mapping": cfg.get("stress_mapping")},
+                        seed=cfg["seed"])
+    mapping = stage_mapping(cfg, args.config, args.strength_envelope, "biaxial")
     t0 = time.time()
 
     def make(names, effect=None, perturbation_m_s=0.0):
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
                          progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s,
-                         backend=args.backend)
+                         backend=args.backend, mapping=mapping)
 
     plain_eval = make([])
     plain_at = plain_eval(np.zeros((1, 0)))[0]
@@ -211,7 +215,7 @@ def _loop(args):
         lp, targets,
         PlainModel(plain_eval.sets[0], plain_at.mean(axis=0), plain, probe_set),
         Selection(candidates, evidence, chosen, after, untestable), base, minutes=(time.time() - t0) / 60,
-        long_term_law=long_term_law))
+        long_term_law=long_term_law, mapping=plain_eval.mapping_records()))
     recorder.finish()
     sets = plain_eval.sets + (probe_eval.sets if probe_eval else []) + [st for c in candidates.values() for st in c.evaluate.sets]
     cases = [f for st in sets for per_test in st["cases"] for f in per_test]  # this run's sets

@@ -32,7 +32,14 @@ def loop_dataset(run, stats):
                "tests_json": json.dumps(stats.before), "covariate_tests_json": json.dumps(stats.covariates),
                "candidates_json": json.dumps(stats.candidates), "chosen": sel.chosen or "none",
                "material_parameters_json": json.dumps(run.base),
-               "untestable_effects": ", ".join(sel.untestable) or "none", **_long_term_attrs(run.long_term_law)})
+               "untestable_effects": ", ".join(sel.untestable) or "none", **_long_term_attrs(run.long_term_law),
+               **_mapping_attrs(run.mapping or {})})
+
+
+def _mapping_attrs(records):
+    """The stress mapping the tests ran under: its kind(s) and each test's record as JSON."""
+    kinds = sorted({r["stress_mapping"] for r in records.values()}) or ["none"]
+    return {"stress_mapping": ", ".join(kinds), "stress_mapping_json": json.dumps(records)}
 
 
 def _long_term_attrs(law):

@@ -4,6 +4,7 @@ tests, what the long-term horizon implies); numbers from statistics.LoopStatisti
 import numpy as np
 
 from ..metrics.output import display_scale
+from ..scenario.mapping import mapping_markdown
 from ..scenario.modifiers import MODIFIERS
 from .select import ALPHA
 from .horizon import STATED_QUANTILE
@@ -33,7 +34,7 @@ def _opening(run, stats, unit):
             f"(the DEM horizon); {len(stats.candidates)} candidate effects at {lp['design_sets']} parameter sets each"
             f"{refined}; "
             f"{run.dem_cases} DEM cases ({run.minutes:.1f} min in this run; cases found in the cache are not rerun). "
-            f"Quantity: {q} [{unit}].", ""]
+            f"Quantity: {q} [{unit}].", "", mapping_markdown(run.mapping or {})]
 
 
 def _dem_horizon(stats, scale):

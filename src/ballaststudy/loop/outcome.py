@@ -65,6 +65,7 @@ class LoopRun:
     base: dict                 # the plain model's material parameters ({}: Table 4.2's)
     minutes: float             # wall time of this run
     long_term_law: object = None   # horizon.LongTermLaw the measured curves chose; None: none given
+    mapping: dict = None       # {test: the stress mapping's record} (scenario.mapping); None: none
 
     @property
     def cycles(self):

@@ -19,18 +19,20 @@ def write_outputs(out, run):
     with atomic_path(files[1]) as tmp:
         loop_dataset(run, stats).to_netcdf(tmp)
     with atomic_path(files[2]) as tmp:
-        tmp.write_text(yaml.safe_dump(chosen_doc(stats, run.base), sort_keys=False))
+        tmp.write_text(yaml.safe_dump(chosen_doc(stats, run.base, run.mapping), sort_keys=False))
     plot_curves(files[3], run, stats)
     with atomic_path(files[0]) as tmp:
         tmp.write_text(report_markdown(run, stats))
     return files
 
 
-def chosen_doc(stats, base):
-    """chosen.yaml: the effect chosen (or none), its fitted parameters and 90 % intervals, and
-    the material parameters it was fitted on."""
+def chosen_doc(stats, base, mapping=None):
+    """chosen.yaml: the effect chosen (or none), its fitted parameters and 90 % intervals, the
+    material parameters it was fitted on and the stress mapping ({test: record}) the tests
+    ran under."""
     row = stats.chosen_row
     return {"effect": row["effect"] if row else "none",
             "parameters": dict(zip(row["parameters"], row["mean"])) if row else {},
             "interval90": dict(zip(row["parameters"], row["interval90"])) if row else {},
-            "material_parameters": base or "table_4_2"}
+            "material_parameters": base or "table_4_2",
+            "stress_mapping": ", ".join(sorted({r["stress_mapping"] for r in (mapping or {}).values()})) or "none"}

@@ -41,6 +41,9 @@ def compare_dataset(measured_path, case_paths):
             "units": units, "long_name": "simulated " + long_name + " (2D biaxial rig)"})
     attrs = {k: v for k, v in measured.attrs.items()
              if k not in ("title", "history")}
+    # the stress mapping the cases ran under (scenario.mapping): the same for all of them
+    attrs.update({k: v for k, v in cases[0].attrs.items() if k.startswith("stress_mapping")}
+                 or {"stress_mapping": "none"})
     attrs.update({
         "Conventions": "CF-1.8",
         "title": "measured cyclic test and its simulated biaxial cases",
@@ -96,5 +99,11 @@ def write_comparison(measured_path, case_paths, out, figure=None):
                          "deviator_max_kPa", "frequency_Hz") if k in ds.attrs)
         failed = ds.attrs["simulated_failures"].count("case ")
         note = f"; {failed} of {ds.sizes['case']} cases failed (attribute simulated_failures)" if failed else ""
+        if ds.attrs["stress_mapping"] != "none":
+            note += (f"\n2D specimens loaded at q {ds.attrs['stress_mapping_deviator_min_kPa']:.4g}-"
+                     f"{ds.attrs['stress_mapping_deviator_max_kPa']:.4g} kPa (stress mapping "
+                     f"{ds.attrs['stress_mapping']}, r = {ds.attrs['stress_mapping_ratio']:.3f})")
+        else:
+            note += "; stress mapping none"
         plot_comparison(ds, figure, f"{ds.attrs.get('source', '')[:90]}\n{cond}{note}")
     return ds

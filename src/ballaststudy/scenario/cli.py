@@ -31,6 +31,7 @@ from ..rig.library import load_library
 from ..rig.params import case_seed
 from ..rig.vtk import vtk_hook
 from .modifiers import ModifierError, load_material_values, material_modifiers
+from .mapping import mapping_from_config
 from .runner import checkpoint_of, prepared_run, write_case
 from .scenario import conditioned_rig, scenario
 
@@ -84,10 +85,16 @@ def case_scenario(args):
         raise ConfigError(args.assembled, None, "--mode needs a biaxial case")
     cfg = load_config(args.config)
     conditions = load_conditions(args.conditions) if args.conditions else None
-    rig = conditioned_rig(kind, cfg.get("rig", {}), conditions, args.mode, args.conditions)
+    mapping = None
+    if conditions is not None and kind == "biaxial":     # the stress mapping maps a test's q
+        mapping = mapping_from_config(cfg, args.config, args.strength_envelope)
+    elif args.strength_envelope:
+        raise ConfigError("command line", "--strength-envelope", "maps a measured test's q onto a "
+                          "biaxial case: it needs --conditions and a biaxial specimen")
+    rig, record = conditioned_rig(kind, cfg.get("rig", {}), conditions, args.mode, args.conditions, mapping)
     material = load_material_values(args.parameters) if args.parameters else {}
     return scenario(kind, [args.assembled], rig, args.cycles, material_modifiers(material), conditions,
-                    args.conditions or "", cfg.get("metrics")), material
+                    args.conditions or "", cfg.get("metrics"), mapping=record), material
 
 
 def _progress(bar, first):
@@ -108,9 +115,11 @@ def _case_run(args):
     ckpt = writable_file(checkpoint_of(out))
     sc, material = case_scenario(args)
     recorder = Recorder("case run", inputs=(args.assembled, args.config,
-                                            *[p for p in (args.conditions, args.parameters) if p]),
+                                            *[p for p in (args.conditions, args.parameters,
+                                                          args.strength_envelope) if p]),
                         params={"cycles": args.cycles, "rig": sc.rig.to_dict(), "metrics": sc.metrics,
-                                "material_parameters": material, "scenario_key": sc.key})
+                                "material_parameters": material, "stress_mapping": sc.mapping,
+                                "scenario_key": sc.key})
     try:
         run, resumed = prepared_run(sc, 0, out, args.checkpoint_every, args.restart)
     except ModifierError as err:          # a calibrated value this specimen cannot take
@@ -231,6 +240,8 @@ def register(subparsers):
                    "the loading mode")
     r.add_argument("--parameters", type=Path, help="a calibrated.yaml (ballaststudy calibrate): "
                    "its parameters instead of Table 4.2's (a fresh run; a resumed one keeps its own)")
+    r.add_argument("--strength-envelope", type=Path, help="the specimens' strength envelope "
+                   "(case envelope), for the config's stress_mapping strength_ratio")
     r.add_argument("--config", default="config/config.yaml", type=Path)
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_case_run)

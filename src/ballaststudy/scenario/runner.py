@@ -74,6 +74,7 @@ def write_case(run, scenario, k, out, figures=False, attrs=None):
         "scenario_key": scenario.key,
         "modifiers_json": json.dumps(scenario.modifier_values()),
         "material_parameters_json": json.dumps(scenario.material_values()),     # {}: Table 4.2's
+        **scenario.mapping,         # the stress mapping the test's q bounds went through
         **(attrs or {})})
 
 

@@ -8,8 +8,9 @@ Its ``key`` is the cache key of its cases: a hash of everything that decides the
 specimens' content (sha-256 of their files, not their names: specimens re-assembled under
 the same names must not reuse old cases), the rig's parameters, the modifiers in the order
 they are applied with their values (12 significant digits), the covariates a modifier may
-read, the cycles, the metrics settings and a chaos probe's perturbation when there is one.
-File names and the conditions file are labels, not part of the key."""
+read, the cycles, the metrics settings, a chaos probe's perturbation when there is one, and the
+stress mapping's kind and ratio when one is applied (mapping.py; the bounds it set are in the
+rig's parameters already). File names and the conditions file are labels, not part of the key."""
 import hashlib
 import json
 from dataclasses import dataclass
@@ -19,6 +20,7 @@ from pathlib import Path
 from ..provenance.record import sha256_file
 from ..rig.kinds import RUNS_TESTS, params_class, params_from_config
 from ..schema import ConfigError
+from .mapping import StressMapping, key_of
 from .modifiers import MODIFIERS
 
 
@@ -54,6 +56,7 @@ class Scenario:
     conditions_file: str = ""       # the measured test's conditions YAML (a label)
     perturbation_m_s: float = 0.0   # > 0: the chaos probe's velocity perturbation
     perturbation_seed: int = 0      # its seed (+ the specimen's index)
+    mapping_json: str = '{"stress_mapping":"none"}'   # the stress mapping's record at the test
 
     @property
     def rig(self):
@@ -68,6 +71,11 @@ class Scenario:
     def metrics(self):
         return json.loads(self.metrics_json)
 
+    @property
+    def mapping(self):
+        """The stress mapping's record at this scenario's test (StressMapping.record)."""
+        return json.loads(self.mapping_json)
+
     def modifier_values(self):
         """[(name, {parameter: value})] in the order they are applied."""
         return [(name, dict(values)) for name, values in self.modifiers]
@@ -81,6 +89,8 @@ class Scenario:
     def key(self):
         probe = ({"perturbation_m_s": self.perturbation_m_s, "perturbation_seed": self.perturbation_seed}
                  if self.perturbation_m_s else {})
+        mapped = key_of(self.mapping)
+        probe.update({"stress_mapping": mapped} if mapped else {})
         text = _canonical({"kind": self.kind, "specimens": list(self.specimen_hashes),
                            "rig": json.loads(self.rig_json), "cycles": self.cycles,
                            "modifiers": [[n, _rounded(dict(v))] for n, v in self.modifiers],
@@ -88,12 +98,17 @@ class Scenario:
         return hashlib.sha1(text.encode()).hexdigest()[:12]
 
 
-def conditioned_rig(kind, rig_config, conditions=None, mode=None, conditions_file="conditions"):
-    """The kind's parameters from the config's ``rig`` section with a measured test's
-    conditions (``measured.importer.load_conditions`` of ``conditions_file``) and a biaxial
-    loading mode applied. ConfigError naming the conditions file if the test is not one the
-    kind runs or its bounds clash with the config's."""
+def conditioned_rig(kind, rig_config, conditions=None, mode=None, conditions_file="conditions",
+                    mapping=None):
+    """(params, mapping record): the kind's parameters from the config's ``rig`` section with
+    a measured test's conditions (``measured.importer.load_conditions`` of
+    ``conditions_file``), the stress ``mapping`` (mapping.StressMapping; None: none) of the
+    test's q bounds onto the biaxial specimen, and a biaxial loading mode applied.
+    ConfigError naming the conditions file if the test is not one the kind runs or its
+    bounds clash with the config's."""
     params = params_from_config(kind, rig_config or {})
+    mapping = mapping or StressMapping()
+    record = {"stress_mapping": "none"}
     if conditions is not None:
         if conditions["rig"] not in RUNS_TESTS[kind]:
             raise ConfigError(conditions_file, "rig", f"{conditions['rig']}: a {kind} case runs "
@@ -102,9 +117,11 @@ def conditioned_rig(kind, rig_config, conditions=None, mode=None, conditions_fil
             params.take_conditions(conditions)
         except ValueError as err:     # a bound of the test against the config's other bound
             raise ConfigError(conditions_file, None, str(err)) from None
+        if kind == "biaxial":       # a box test is loaded as measured: nothing to map
+            record = mapping.apply(params)
     if mode:
         params.mode = mode      # biaxial only: the caller checks
-    return params
+    return params, record
 
 
 def _shifted(value):
@@ -137,10 +154,11 @@ def conditioned_keys(kind, conditions_list):
 
 
 def scenario(kind, specimens, rig, cycles, modifiers=(), conditions=None, conditions_file="",
-             metrics=None, perturbation_m_s=0.0, perturbation_seed=0):
-    """A Scenario from plain values: ``rig`` a params object (conditioned_rig), ``modifiers``
-    [(name, {parameter: value})] checked against the registry, ``conditions`` the loaded
-    test (its covariates are kept)."""
+             metrics=None, perturbation_m_s=0.0, perturbation_seed=0, mapping=None):
+    """A Scenario from plain values: ``rig`` a params object and ``mapping`` its stress
+    mapping's record (both from conditioned_rig; None: none), ``modifiers`` [(name,
+    {parameter: value})] checked against the registry, ``conditions`` the loaded test (its
+    covariates are kept)."""
     for name, values in modifiers:
         MODIFIERS[name].check(values)
     specimens = tuple(str(s) for s in specimens)
@@ -151,4 +169,5 @@ def scenario(kind, specimens, rig, cycles, modifiers=(), conditions=None, condit
                         for name, values in modifiers),
         covariates_json=_canonical((conditions or {}).get("covariates") or {}),
         metrics_json=_canonical(metrics), conditions_file=str(conditions_file or ""),
-        perturbation_m_s=float(perturbation_m_s), perturbation_seed=int(perturbation_seed))
+        perturbation_m_s=float(perturbation_m_s), perturbation_seed=int(perturbation_seed),
+        mapping_json=_canonical(mapping or {"stress_mapping": "none"}))
