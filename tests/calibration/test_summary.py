@@ -36,3 +36,27 @@ def test_summary_warns_of_few_specimens_for_several_tests(tmp_path):
         text = (tmp_path / "s.md").read_text()
         assert ("read the intervals as too narrow" in text) == warned
         assert "DEM cases run: 12 (2 parameter sets x 2 tests x" in text
+
+
+def test_summary_names_the_stress_mapping(tmp_path):
+    """summary.md says which stress mapping the tests ran under (scenario/mapping.py)."""
+    class Flat:
+        def predict(self, thetas):
+            return np.zeros((len(thetas), 1)), np.zeros((len(thetas), 1))
+    post = posterior(Flat(), np.zeros(1), np.ones(1), [0.0], [1.0], 64)
+    summary = dict(quantity="axial_strain", points=1, cycles=5, method="m", table_4_2={"mu": 0.7},
+                   prior_coverage={"mu": 0.9}, correlation={}, rmse_before=1.0, rmse_after=0.5, dem_cases=3,
+                   targets=["a"], sets=1, failed_cases=0, cases=3)
+    summary_markdown(tmp_path / "s.md", "a", ["mu"], post, summary)
+    assert "Stress mapping: **none**" in (tmp_path / "s.md").read_text()
+    record = {"stress_mapping": "strength_ratio", "stress_mapping_ratio": 0.5,
+              "stress_mapping_confining_pressure_kPa": 30.0, "stress_mapping_lab_q_peak_kPa": 400.0,
+              "stress_mapping_model_q_peak_kPa": 200.0, "stress_mapping_lab_deviator_min_kPa": 15.0,
+              "stress_mapping_lab_deviator_max_kPa": 230.0, "stress_mapping_deviator_min_kPa": 7.5,
+              "stress_mapping_deviator_max_kPa": 115.0, "stress_mapping_lab_envelope_citation": "planted",
+              "stress_mapping_model_envelope_file": "env.nc"}
+    summary_markdown(tmp_path / "s.md", "a", ["mu"], post, {**summary, "stress_mapping_tests": {"src/a": record}})
+    text = (tmp_path / "s.md").read_text()
+    assert "Stress mapping: **strength_ratio**" in text
+    assert "| src/a | 30 | 400 | 200 | 0.5000 | 15-230 | 7.5-115 |" in text
+

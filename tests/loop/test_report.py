@@ -100,12 +100,15 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert stats.after_rmse == pytest.approx(1e-4) and stats.chosen_row["effect"] == "end_restraint"
     assert stats.candidates[0]["held_out_rmse"] == pytest.approx(1e-4)
     assert chosen_doc(stats, {}) == {"effect": "end_restraint", "parameters": {"platen_friction": 0.3},
-                                     "interval90": {"platen_friction": [0.2, 0.4]}, "material_parameters": "table_4_2"}
+                                     "interval90": {"platen_friction": [0.2, 0.4]}, "material_parameters": "table_4_2",
+                                     "stress_mapping": "none"}
     ds = loop_dataset(run, stats)
     assert ds["candidate"].shape == (1, 2, 2, 2, 3) and "after" in ds and "plain_probe" not in ds
     assert list(ds["effect_parameter"].values[0]) == ["platen_friction"] and ds.attrs["chosen"] == "end_restraint"
     assert ds.attrs["untestable_effects"] == "fouling" and ds["cycle"].values.tolist() == [1.0, 2.0, 3.0]
+    assert ds.attrs["stress_mapping"] == "none"
     text = report_markdown(run, stats)
+    assert "Stress mapping: **none**" in text
     assert "16 DEM cases (0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
     assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] |" in text
     assert "| 0.01 | 2 | chosen |" in text                   # held-out RMSE, cut / scatter sqrt(4), verdict
@@ -147,5 +150,5 @@ def test_no_effect_chosen():
     stats = LoopStatistics(stats.before, None, [], candidate_rows(run.selection, TARGETS), stats.long_term, None,
                            stats.plain_rmse)
     assert chosen_doc(stats, {"mu": 0.5}) == {"effect": "none", "parameters": {}, "interval90": {},
-                                              "material_parameters": {"mu": 0.5}}
+                                              "material_parameters": {"mu": 0.5}, "stress_mapping": "none"}
     assert "after" not in loop_dataset(run, stats) and "**No effect chosen**" in report_markdown(run, stats)

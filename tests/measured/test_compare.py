@@ -8,11 +8,11 @@ from ballaststudy.cli import main
 from .test_import import write_test
 
 
-def fake_case(path, strains):
+def fake_case(path, strains, **attrs):
     n = len(strains)
     ds = xr.Dataset({"axial_strain": ("cycle", np.asarray(strains, float), {"units": "1"}),
                      "volumetric_strain": ("cycle", -np.asarray(strains, float), {"units": "1"})},
-                    coords={"cycle": np.arange(n)}, attrs={"seed": 5})
+                    coords={"cycle": np.arange(n)}, attrs={"seed": 5, **attrs})
     ds.to_netcdf(path)
     return path
 
@@ -36,6 +36,7 @@ def test_measured_and_simulated_on_one_axis(tmp_path):
         np.testing.assert_array_equal(ds["measured_axial_strain"].values[[0, 3, 4]], [0.01, 0.02, 0.03])
         assert np.isnan(ds["measured_axial_strain"].values[[1, 2, 5]]).all()
         assert ds.attrs["confining_pressure_kPa"] == 30 and ds.attrs["Conventions"]
+        assert ds.attrs["stress_mapping"] == "none"        # cases that name none (or nothing)
         for v in ds.data_vars.values():
             assert v.attrs["units"] and v.attrs["long_name"]
     assert out.with_suffix(".png").stat().st_size > 1000
@@ -71,3 +72,21 @@ def test_a_failed_case_is_kept_with_its_reason(tmp_path):
         assert ds.attrs["simulated_failures"] == "case 0: the specimen failed in the first loading: x"
         assert np.isnan(ds["simulated_axial_strain"].values[0]).all()
         np.testing.assert_array_equal(ds["simulated_axial_strain"].values[1, :2], [0.001, 0.002])
+
+
+def test_the_stress_mapping_of_the_cases_is_named(tmp_path):
+    """Cases run under a stress mapping (scenario/mapping.py): the comparison carries its
+    record - the lab's q and the q the 2D specimens were loaded at - and the figure says so."""
+    d = tmp_path / "m"
+    d.mkdir()
+    measured = tmp_path / "measured.nc"
+    main(["measured", "import", str(write_test(d)), "--out", str(measured), "--quiet"])
+    record = {"stress_mapping": "strength_ratio", "stress_mapping_ratio": 0.5,
+              "stress_mapping_deviator_min_kPa": 5.0, "stress_mapping_deviator_max_kPa": 100.0,
+              "stress_mapping_lab_deviator_max_kPa": 200.0}
+    case = fake_case(tmp_path / "c0.nc", [0.001, 0.002], **record)
+    out = tmp_path / "cmp.nc"
+    assert main(["measured", "compare", str(measured), str(case), "--out", str(out), "--quiet"]) == 0
+    with xr.open_dataset(out) as ds:
+        assert {k: ds.attrs[k] for k in record} == record
+    assert out.with_suffix(".png").stat().st_size > 1000

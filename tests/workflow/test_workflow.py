@@ -84,6 +84,39 @@ def test_parametric_study_is_planned(study):
                     "case_assemble": par["cases"], "bpm_build": 1, "parametric": 1}, jobs
 
 
+def test_a_stress_mapping_plans_its_sets_strength_envelope_first(study):
+    """stress_mapping strength_ratio: measured_sim and calibrate read the strength envelope of
+    their own specimen set (strength_case at every p of the measured tests, then
+    strength_envelope) and pass it on; none plans neither. The lab envelope is planted."""
+    tests = study / "config" / "measured_planted"
+    tests.mkdir(exist_ok=True)
+    (tests / "ax.dat").write_text("1, 0.01\n2, 0.02\n5, 0.03\n")
+    for p in (30, 45, 60):
+        (tests / f"p{p}.yaml").write_text(yaml.safe_dump(dict(
+            source="planted", rig="triaxial", confining_pressure_kPa=p, deviator_max_kPa=230,
+            frequency_Hz=5, curves=[dict(file="ax.dat", quantity="axial_strain", units="1",
+                                         sign="compression_positive")])))
+
+    def planted(cfg, kind):
+        cfg["measured"]["tests_dir"] = "config/measured_planted"
+        cfg["calibration"]["targets"] = ["p30"]
+        cfg["loop"]["targets"] = ["p30", "p45", "p60"]
+        cfg["stress_mapping"] = {"kind": kind, "lab_envelope": {
+            "citation": "planted", "confining_pressure_kPa": [10.0, 100.0], "peak_deviator_kPa": [300.0, 900.0]}}
+
+    with _edited(study / "config" / "config.yaml", lambda cfg: planted(cfg, "strength_ratio")):
+        log = _snakemake(study, "-n", "-p", "measured_sim", "calibrate", "loop")
+    jobs = _jobs(log)
+    cases = yaml.safe_load((study / "config" / "config.yaml").read_text())["strength"]["cases"]
+    assert jobs["strength_case"] == 3 * cases and jobs["strength_envelope"] == 1, jobs
+    envelope = "--strength-envelope results/strength/biaxial_small/envelope.nc"
+    assert log.count(envelope) == 3 + 1 + 1, log       # measured_sim_run per test, calibrate, loop
+    with _edited(study / "config" / "config.yaml", lambda cfg: planted(cfg, "none")):
+        log = _snakemake(study, "-n", "-p", "measured_sim", "calibrate", "loop")
+    assert "strength_case" not in _jobs(log) and "--strength-envelope" not in log
+    shutil.rmtree(tests)
+
+
 def _loading(cfg):
     return cfg["rig"]["box"]["loading"]
 
