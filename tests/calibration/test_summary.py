@@ -20,17 +20,21 @@ def test_held_out_rmse_is_per_test():
     assert "| b | 1 | 0 | 3 |" in table and _held_out_table(None) == ""
 
 
-def test_summary_warns_of_few_specimens_for_several_tests(tmp_path):
-    """Several targets with K < 6 specimens: summary.md says the intervals are too narrow."""
+def _flat_summary(points, **extra):
+    """A posterior of a flat surrogate over ``points`` measured points, and a summary of it."""
     class Flat:
         def predict(self, thetas):
-            return np.zeros((len(thetas), 2)), np.zeros((len(thetas), 2))
-    post = posterior(Flat(), np.zeros(2), np.ones(2), [0.0], [1.0], 64)
-    summary = dict(quantity="axial_strain", points=2, cycles=5, method="m", table_4_2={"mu": 0.7},
-                   prior_coverage={"mu": 0.9}, correlation={}, rmse_before=1.0, rmse_after=0.5, dem_cases=12,
-                   targets=["a", "b"],
-                   sets=2, failed_cases=0,
-                   held_out={t: {"rmse_before": 1.0, "rmse_after": 0.5, "rmse_held_out": 0.7} for t in "ab"})
+            return np.zeros((len(thetas), points)), np.zeros((len(thetas), points))
+    post = posterior(Flat(), np.zeros(points), np.ones(points), [0.0], [1.0], 64)
+    return post, dict(quantity="axial_strain", points=points, cycles=5, method="m", table_4_2={"mu": 0.7},
+                      prior_coverage={"mu": 0.9}, correlation={}, rmse_before=1.0, rmse_after=0.5,
+                      failed_cases=0, **extra)
+
+
+def test_summary_warns_of_few_specimens_for_several_tests(tmp_path):
+    """Several targets with K < 6 specimens: summary.md says the intervals are too narrow."""
+    post, summary = _flat_summary(2, dem_cases=12, targets=["a", "b"], sets=2, held_out={
+        t: {"rmse_before": 1.0, "rmse_after": 0.5, "rmse_held_out": 0.7} for t in "ab"})
     for cases, warned in ((3, True), (6, False)):
         summary_markdown(tmp_path / "s.md", "a, b", ["mu"], post, {**summary, "cases": cases})
         text = (tmp_path / "s.md").read_text()
@@ -40,13 +44,7 @@ def test_summary_warns_of_few_specimens_for_several_tests(tmp_path):
 
 def test_summary_names_the_stress_mapping(tmp_path):
     """summary.md says which stress mapping the tests ran under (scenario/mapping.py)."""
-    class Flat:
-        def predict(self, thetas):
-            return np.zeros((len(thetas), 1)), np.zeros((len(thetas), 1))
-    post = posterior(Flat(), np.zeros(1), np.ones(1), [0.0], [1.0], 64)
-    summary = dict(quantity="axial_strain", points=1, cycles=5, method="m", table_4_2={"mu": 0.7},
-                   prior_coverage={"mu": 0.9}, correlation={}, rmse_before=1.0, rmse_after=0.5, dem_cases=3,
-                   targets=["a"], sets=1, failed_cases=0, cases=3)
+    post, summary = _flat_summary(1, dem_cases=3, targets=["a"], sets=1, cases=3)
     summary_markdown(tmp_path / "s.md", "a", ["mu"], post, summary)
     assert "Stress mapping: **none**" in (tmp_path / "s.md").read_text()
     record = {"stress_mapping": "strength_ratio", "stress_mapping_ratio": 0.5,
