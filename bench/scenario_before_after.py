@@ -56,6 +56,8 @@ def small_config(src):
         cfg["calibration"].update(specimens="small_biaxial", cases=small["cases"], **calibration)
         cfg["loop"].update(specimens="small_biaxial", cases=small["cases"], **loop)
         cfg["parametric"].update(specimens="box_cases", **parametric)
+        if "strength" in cfg:               # its set must exist (the targets run no strength test)
+            cfg["strength"].update(specimens="small_biaxial", cases=small["cases"])
     else:
         cfg["measured"]["sim"].update(cycles=3, **small)
         cfg["calibration"].update(**small, **calibration)

@@ -110,11 +110,14 @@ def test_calibrate_a_box_test_end_to_end(box_target, tmp_path):
     doc = yaml.safe_load((out / "calibrated.yaml").read_text())
     assert doc["quantity"] == "settlement" and doc["dem_cases"] == 2 * 4     # 3 + the calibrated set
     assert 0.4 <= doc["parameters"]["mu"] <= 1.2 and np.isfinite(doc["rmse_after"])
+    assert doc["stress_mapping"] == "none"              # a box test is loaded as measured
     with xr.open_dataset(out / "evaluations.nc") as ds:
         assert ds["settlement"].attrs["units"] == "m" and ds.sizes["case"] == 2
         assert ds["settlement"].shape == (4, 1, 2, CYCLES)
     for name in ("posterior.nc", "curves.png", "corner.png", "summary.md"):
         assert (out / name).is_file()
+    with xr.open_dataset(out / "posterior.nc") as ds:
+        assert ds.attrs["stress_mapping"] == "none"
 
 
 def test_box_specimens_refuse_other_tests(box_target, tmp_path, capsys):

@@ -77,6 +77,8 @@ def test_loop_end_to_end(tiny, tmp_path):
     assert "| fouling | - |" in text and "not testable: no target declares VCI" in text
     assert "**No effect chosen**" in text
     assert yaml.safe_load((out / "chosen.yaml").read_text())["effect"] == "none"
+    assert yaml.safe_load((out / "chosen.yaml").read_text())["stress_mapping"] == "none"
+    assert "Stress mapping: **none**" in text
     with xr.open_dataset(out / "loop.nc") as ds:
         assert ds["plain"].shape == (3, 2, 5) and ds["candidate"].shape == (1, 4, 3, 2, 5)
         refined = ds["candidate_value"].values[0, 2:, 0]       # the grid's 2 sets, then 1 round of 2
@@ -84,6 +86,7 @@ def test_loop_end_to_end(tiny, tmp_path):
         assert ds["measured"].size == 15                  # 5 points per test within N <= 5
         assert list(ds["effect"].values) == ["end_restraint"] and ds.attrs["untestable_effects"] == "fouling"
         assert ds["plain"].attrs["units"] == "1" and ds.attrs["Conventions"] == "CF-1.8"
+        assert ds.attrs["stress_mapping"] == "none" and len(json.loads(ds.attrs["stress_mapping_json"])) == 3
         cands = json.loads(ds.attrs["candidates_json"])
         tests = json.loads(ds.attrs["tests_json"])
     assert all(np.isfinite(t["mean_coordination"]) and t["mean_coordination"] > 1 for t in tests)
@@ -110,6 +113,21 @@ def test_loop_checks_before_any_case(tiny, tmp_path, capsys, change, key):
     assert main(_argv(tiny, out, config)) == 2
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and key in line, line
+    assert not out.exists() or not any(out.rglob("*.nc"))
+
+
+def test_a_stress_mapping_without_its_envelope_is_refused(tiny, tmp_path, capsys):
+    """stress_mapping strength_ratio needs the specimens' strength envelope: one line naming
+    the option, exit 2, before any case (the lab envelope is planted)."""
+    config = _config(tmp_path)
+    cfg = yaml.safe_load(config.read_text())
+    cfg["stress_mapping"] = {"kind": "strength_ratio", "lab_envelope": {
+        "citation": "planted", "confining_pressure_kPa": [10.0], "peak_deviator_kPa": [300.0]}}
+    config.write_text(yaml.safe_dump(cfg))
+    out = tmp_path / "out"
+    assert main(_argv(tiny, out, config)) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and "--strength-envelope: missing" in line, line
     assert not out.exists() or not any(out.rglob("*.nc"))
 
 

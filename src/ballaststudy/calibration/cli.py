@@ -217,10 +217,10 @@ def _calibrate(args):
     rounds.append(-1)
     before = 0 if inside else len(rounds) - 2
     mapped = evaluate.mapping_records()
+    attrs = {"targets": ", ".join(targets), "method": METHOD, "stress_mapping": mapping.kind,
+             "stress_mapping_json": json.dumps(mapped)}
     ds = evaluations_dataset(names, evaluate.sets, rounds, points, point_test, y, cal["cycles"],
-                             cal["quantity"], {"targets": ", ".join(targets), "method": METHOD,
-                                               "stress_mapping": mapping.kind,
-                                               "stress_mapping_json": json.dumps(mapped)})
+                             cal["quantity"], attrs)
     at = ds[cal["quantity"] + "_at_points"].values
     summary = dict(
         targets=targets, quantity=cal["quantity"], cycles=cal["cycles"], cases=cal["cases"],
@@ -241,7 +241,7 @@ def _calibrate(args):
     files = {k: out / k for k in ("evaluations.nc", "posterior.nc", "calibrated.yaml",
                                   "curves.png", "corner.png", "summary.md")}
     write_netcdf(ds, files["evaluations.nc"])
-    write_netcdf(posterior_dataset(names, res.posterior, {"targets": ", ".join(targets), "method": METHOD}),
+    write_netcdf(posterior_dataset(names, res.posterior, attrs),
                  files["posterior.nc"])
     calibrated_yaml(files["calibrated.yaml"], names, res.posterior,
                     {k: v for k, v in summary.items() if k != "correlation"})
