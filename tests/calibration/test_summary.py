@@ -49,12 +49,13 @@ def test_summary_names_the_stress_mapping(tmp_path):
     assert "Stress mapping: **none**" in (tmp_path / "s.md").read_text()
     record = {"stress_mapping": "strength_ratio", "stress_mapping_ratio": 0.5,
               "stress_mapping_confining_pressure_kPa": 30.0, "stress_mapping_lab_q_peak_kPa": 400.0,
-              "stress_mapping_model_q_peak_kPa": 200.0, "stress_mapping_lab_deviator_min_kPa": 15.0,
+              "stress_mapping_model_q_peak_kPa": 200.0, "stress_mapping_model_peak_share": 1.0,
+              "stress_mapping_lab_deviator_min_kPa": 15.0,
               "stress_mapping_lab_deviator_max_kPa": 230.0, "stress_mapping_deviator_min_kPa": 7.5,
               "stress_mapping_deviator_max_kPa": 115.0, "stress_mapping_lab_envelope_citation": "planted",
               "stress_mapping_model_envelope_file": "env.nc"}
     summary_markdown(tmp_path / "s.md", "a", ["mu"], post, {**summary, "stress_mapping_tests": {"src/a": record}})
     text = (tmp_path / "s.md").read_text()
     assert "Stress mapping: **strength_ratio**" in text
-    assert "| src/a | 30 | 400 | 200 | 0.5000 | 15-230 | 7.5-115 |" in text
+    assert "| src/a | 30 | 400 | 200 (100 %) | 0.5000 | 15-230 | 7.5-115 |" in text
 

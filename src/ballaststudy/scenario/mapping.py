@@ -181,7 +181,8 @@ def mapping_markdown(records):
                 "are; config `stress_mapping`).\n")
     rows = "\n".join(
         f"| {t} | {r['stress_mapping_confining_pressure_kPa']:g} | {r['stress_mapping_lab_q_peak_kPa']:.4g} | "
-        f"{r['stress_mapping_model_q_peak_kPa']:.4g} | {r['stress_mapping_ratio']:.4f} | "
+        f"{r['stress_mapping_model_q_peak_kPa']:.4g} ({100 * r['stress_mapping_model_peak_share']:.0f} %) | "
+        f"{r['stress_mapping_ratio']:.4f} | "
         f"{r['stress_mapping_lab_deviator_min_kPa']:.4g}-{r['stress_mapping_lab_deviator_max_kPa']:.4g} | "
         f"{r['stress_mapping_deviator_min_kPa']:.4g}-{r['stress_mapping_deviator_max_kPa']:.4g} |"
         for t, r in records.items() if r["stress_mapping"] != "none")
@@ -191,7 +192,11 @@ each test's q bounds scaled by r = q_peak_2D(p) / q_peak_lab(p), so that the 2D 
 loaded to the fraction of their own peak at which the lab test loads the ballast. 2D envelope:
 {first['stress_mapping_model_envelope_file']}; lab envelope: {first['stress_mapping_lab_envelope_citation']}.
 
-| test | p [kPa] | lab q_peak [kPa] | 2D q_peak [kPa] | r | lab q [kPa] | 2D q run [kPa] |
+2D q_peak is the mean over the set's strength tests at p; in brackets the share of them whose
+q fell past its peak (the others were still rising at the test's end: their q_peak is a lower
+bound, and so is r).
+
+| test | p [kPa] | lab q_peak [kPa] | 2D q_peak [kPa] (past peak) | r | lab q [kPa] | 2D q run [kPa] |
 |---|---|---|---|---|---|---|
 {rows}
 """
