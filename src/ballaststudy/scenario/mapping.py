@@ -28,10 +28,10 @@ import numpy as np
 
 from ..config import check_stress_mapping
 from ..inputs import open_netcdf
+from ..rig.biaxial.params import KPA
 from ..schema import ConfigError
 
 SECTION = "stress_mapping"
-KPA = 1.0e3
 
 
 @dataclass(frozen=True)
@@ -110,13 +110,6 @@ class StressMapping:
             "stress_mapping_lab_envelope_citation": self.citation,
             "stress_mapping_model_envelope_file": self.envelope_file})
         return rec
-
-    def describe(self):
-        """One line for reports."""
-        if not self.applied:
-            return "none (the 2D specimen carries the lab test's p and q as they are)"
-        return (f"strength_ratio: q scaled by q_peak_2D(p) / q_peak_lab(p); 2D envelope "
-                f"{self.envelope_file}; lab envelope: {self.citation}")
 
 
 def key_of(record):
