@@ -19,7 +19,7 @@ rule calibrate:
         measured=[f"{RESULTS}/measured/{t}.nc" for t in CAL_TARGETS],
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in CAL_TARGETS],
         specimens=specimen_files("calibration"),
-        envelope=mapping_input("calibration") if CAL_KIND == "biaxial" else [],
+        envelope=mapping_input("calibration"),
     output:
         yaml=f"{CAL_OUT}/calibrated.yaml",
         nc=f"{CAL_OUT}/evaluations.nc",
@@ -34,7 +34,7 @@ rule calibrate:
         out_dir=CAL_OUT,
         config=CONFIG_FILE,
         backend=config["backend"],
-        mapping=mapping_option("calibration") if CAL_KIND == "biaxial" else "",
+        mapping=mapping_option("calibration"),
         mapping_settings=trigger("stress_mapping"),
     threads: 256      # Snakemake caps it at --cores (workflow.cores breaks snakemake --report)
     log:

@@ -53,8 +53,10 @@ MAPPED = (config.get("stress_mapping") or {}).get("kind", "none") != "none"
 
 
 def mapping_input(stage):
-    """The strength envelope a stage's stress mapping reads: its set's; [] for none."""
-    return [f"{RESULTS}/strength/{section(stage)['specimens']}/envelope.nc"] if MAPPED else []
+    """The strength envelope a stage's stress mapping reads: its set's; [] for none and for a
+    box set (box tests are loaded as measured)."""
+    name = section(stage)["specimens"]
+    return [f"{RESULTS}/strength/{name}/envelope.nc"] if MAPPED and SPECIMENS[name]["rig"] == "biaxial" else []
 
 
 def mapping_option(stage):

@@ -25,7 +25,7 @@ from ..argtypes import integer
 from ..atomic import atomic_path
 from ..config import ConfigError, load_config
 from ..inputs import input_file, open_netcdf, writable_dir, writable_file
-from ..measured.importer import load_conditions
+from ..measured.importer import load_conditions, measured_test_name
 from ..provenance import Recorder
 from ..rig.kinds import RUNS_TESTS, kind_for_test, kind_of, rig_classes
 from ..scenario.mapping import stage_mapping
@@ -233,7 +233,7 @@ def _calibrate(args):
     summary["prior_coverage"] = {k: float((b - a) / (hi - lo)) for k, (a, b), lo, hi
                                  in zip(names, res.posterior.interval90, lower, upper)}
     if len(targets) > 1:
-        tests = [f"{Path(m).parent.name}/{Path(m).stem}" for m in args.measured]
+        tests = [measured_test_name(m) for m in args.measured]
         summary["held_out"] = held_out_rmse(res.held_out(y, point_test), at[before].mean(axis=0),
                                             at[-1].mean(axis=0), y, point_test, tests)
     summary["correlation"] = {f"{a}~{b}": float(res.posterior.correlation[i, j])

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..config import load_config
 from ..inputs import open_netcdf
-from ..measured.importer import load_conditions
+from ..measured.importer import load_conditions, measured_test_name
 from ..rig.kinds import kind_of
 from ..scenario.modifiers import material_modifiers
 from ..scenario.results import at_points, case_curve
@@ -71,8 +71,7 @@ class Evaluator:
 
     def mapping_records(self):
         """{test (source/name): its stress mapping's record}."""
-        return {f"{Path(t['conditions']).parent.name}/{Path(t['conditions']).stem}": t["mapping"]
-                for t in self.tests}
+        return {measured_test_name(t["conditions"]): t["mapping"] for t in self.tests}
 
     def __call__(self, thetas):
         batch = [dict(zip(self.names, map(float, t))) for t in np.atleast_2d(thetas)]

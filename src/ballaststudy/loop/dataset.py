@@ -7,6 +7,7 @@ import numpy as np
 import xarray as xr
 
 from ..metrics.output import VARIABLES
+from ..scenario.mapping import mapping_kinds
 
 CF = "CF-1.8"
 
@@ -38,8 +39,7 @@ def loop_dataset(run, stats):
 
 def _mapping_attrs(records):
     """The stress mapping the tests ran under: its kind(s) and each test's record as JSON."""
-    kinds = sorted({r["stress_mapping"] for r in records.values()}) or ["none"]
-    return {"stress_mapping": ", ".join(kinds), "stress_mapping_json": json.dumps(records)}
+    return {"stress_mapping": mapping_kinds(records), "stress_mapping_json": json.dumps(records)}
 
 
 def _long_term_attrs(law):

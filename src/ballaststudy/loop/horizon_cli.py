@@ -10,6 +10,7 @@ import numpy as np
 from ..atomic import atomic_path
 from ..argtypes import number
 from ..inputs import writable_dir
+from ..measured.importer import measured_test_name
 from ..metrics.output import display_scale
 from .accumulation import LAWS, fit_law
 from .horizon import STATED_QUANTILE, horizon_table, measured_curve
@@ -18,12 +19,6 @@ LAW_FORMS = {"sato": "eps0 + gamma (1 - e^(-alpha (N-1))) + beta (N-1)",
              "shakedown": "eps0 + gamma (1 - e^(-alpha (N-1)))",
              "hardening_log": "eps0 + gamma (1 - e^(-alpha (N-1))) + c ln N",
              "log": "a + b ln N", "power": "a N^b"}
-
-
-def test_name(path):
-    """A measured netCDF's test name: its folder and stem (sun_et_al_16/p30_q230_f10)."""
-    path = Path(path)
-    return f"{path.parent.name}/{path.stem}"
 
 
 def horizon_markdown(ds):
@@ -108,7 +103,7 @@ def plot_horizon(path, ds, curves):
 def _horizon(args):
     out = writable_dir(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    curves = {test_name(p): measured_curve(p, args.quantity) for p in args.measured}
+    curves = {measured_test_name(p): measured_curve(p, args.quantity) for p in args.measured}
     ds = horizon_table(curves, sorted(args.fit_cycles), args.quantity)
     with atomic_path(out / "horizon.nc") as tmp:
         ds.to_netcdf(tmp)

@@ -4,6 +4,7 @@ computes from it once."""
 import yaml
 
 from ..atomic import atomic_path
+from ..scenario.mapping import mapping_kinds
 from .dataset import loop_dataset
 from .markdown import report_markdown
 from .plots import plot_curves
@@ -35,4 +36,4 @@ def chosen_doc(stats, base, mapping=None):
             "parameters": dict(zip(row["parameters"], row["mean"])) if row else {},
             "interval90": dict(zip(row["parameters"], row["interval90"])) if row else {},
             "material_parameters": base or "table_4_2",
-            "stress_mapping": ", ".join(sorted({r["stress_mapping"] for r in (mapping or {}).values()})) or "none"}
+            "stress_mapping": mapping_kinds(mapping or {})}

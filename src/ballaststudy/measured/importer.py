@@ -43,6 +43,13 @@ def load_conditions(path):
     return cfg
 
 
+def measured_test_name(path):
+    """A measured test's name from its netCDF or conditions YAML: its folder and stem
+    (sun_et_al_16/p30_q230_f10)."""
+    path = Path(path)
+    return f"{path.parent.name}/{path.stem}"
+
+
 def curve_path(conditions_file, name, data_dir=None):
     """A curve file beside the YAML, else in ``data_dir``."""
     here = Path(conditions_file).parent / name

@@ -31,7 +31,7 @@ from ..rig.library import load_library
 from ..rig.params import case_seed
 from ..rig.vtk import vtk_hook
 from .modifiers import ModifierError, load_material_values, material_modifiers
-from .mapping import mapping_from_config
+from .mapping import stage_mapping
 from .runner import checkpoint_of, prepared_run, write_case
 from .scenario import conditioned_rig, scenario
 
@@ -85,12 +85,10 @@ def case_scenario(args):
         raise ConfigError(args.assembled, None, "--mode needs a biaxial case")
     cfg = load_config(args.config)
     conditions = load_conditions(args.conditions) if args.conditions else None
-    mapping = None
-    if conditions is not None and kind == "biaxial":     # the stress mapping maps a test's q
-        mapping = mapping_from_config(cfg, args.config, args.strength_envelope)
-    elif args.strength_envelope:
-        raise ConfigError("command line", "--strength-envelope", "maps a measured test's q onto a "
-                          "biaxial case: it needs --conditions and a biaxial specimen")
+    if conditions is None and args.strength_envelope:     # the mapping maps a test's q
+        raise ConfigError("command line", "--strength-envelope", "maps a measured test's q: it "
+                          "needs --conditions")
+    mapping = stage_mapping(cfg, args.config, args.strength_envelope, kind) if conditions else None
     rig, record = conditioned_rig(kind, cfg.get("rig", {}), conditions, args.mode, args.conditions, mapping)
     material = load_material_values(args.parameters) if args.parameters else {}
     return scenario(kind, [args.assembled], rig, args.cycles, material_modifiers(material), conditions,

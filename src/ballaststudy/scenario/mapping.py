@@ -83,10 +83,11 @@ class StressMapping:
     def apply(self, params):
         """Scale a biaxial params object's q bounds (a test's conditions already taken) by
         r at its p. Returns the record of what was done (``record``)."""
+        if not self.applied:        # whatever the rig: nothing to read or scale
+            return {"stress_mapping": "none"}
         rec = self.record(params.confining_pressure_kPa, params.deviator_min_kPa, params.deviator_max_kPa)
-        if self.applied:
-            params.deviator_min_kPa = rec["stress_mapping_deviator_min_kPa"]
-            params.deviator_max_kPa = rec["stress_mapping_deviator_max_kPa"]
+        params.deviator_min_kPa = rec["stress_mapping_deviator_min_kPa"]
+        params.deviator_max_kPa = rec["stress_mapping_deviator_max_kPa"]
         return rec
 
     def record(self, p_kPa, q_min_kPa, q_max_kPa):
@@ -95,13 +96,12 @@ class StressMapping:
         rec = {"stress_mapping": self.kind}
         if not self.applied:
             return rec
-        r = self.ratio(p_kPa)
-        k = self._model_index(p_kPa)
+        k, r = self._model_index(p_kPa), self.ratio(p_kPa)
         rec.update({
             "stress_mapping_ratio": r,
             "stress_mapping_confining_pressure_kPa": float(p_kPa),
             "stress_mapping_lab_q_peak_kPa": self.lab_q_peak_kPa_at(p_kPa),
-            "stress_mapping_model_q_peak_kPa": self.model_q_peak_kPa_at(p_kPa),
+            "stress_mapping_model_q_peak_kPa": float(self.model_q_peak_kPa[k]),
             "stress_mapping_model_peak_share": float(self.model_peak_share[k]),
             "stress_mapping_lab_deviator_min_kPa": float(q_min_kPa),
             "stress_mapping_lab_deviator_max_kPa": float(q_max_kPa),
@@ -165,11 +165,17 @@ def stage_mapping(cfg, config_file, envelope_file, kind):
     return StressMapping(config_file=str(config_file))
 
 
+def mapping_kinds(records):
+    """The kind(s) of stress mapping a stage's tests ran under ({test: record}), as one word
+    ("none" when there are none)."""
+    return ", ".join(sorted({r["stress_mapping"] for r in records.values()})) or "none"
+
+
 def mapping_markdown(records):
     """A report's lines on the stress mapping its tests ran under: ``records`` {test: record}
     (StressMapping.record)."""
-    kinds = sorted({r["stress_mapping"] for r in records.values()}) or ["none"]
-    if kinds == ["none"]:
+    kinds = mapping_kinds(records)
+    if kinds == "none":
         return ("Stress mapping: **none** (the 2D specimens carry the lab tests' p and q as they "
                 "are; config `stress_mapping`).\n")
     rows = "\n".join(
@@ -180,7 +186,7 @@ def mapping_markdown(records):
         f"{r['stress_mapping_deviator_min_kPa']:.4g}-{r['stress_mapping_deviator_max_kPa']:.4g} |"
         for t, r in records.items() if r["stress_mapping"] != "none")
     first = next(r for r in records.values() if r["stress_mapping"] != "none")
-    return f"""Stress mapping: **{', '.join(kinds)}** (config `stress_mapping`, a modelling assumption):
+    return f"""Stress mapping: **{kinds}** (config `stress_mapping`, a modelling assumption):
 each test's q bounds scaled by r = q_peak_2D(p) / q_peak_lab(p), so that the 2D specimens are
 loaded to the fraction of their own peak at which the lab test loads the ballast. 2D envelope:
 {first['stress_mapping_model_envelope_file']}; lab envelope: {first['stress_mapping_lab_envelope_citation']}.

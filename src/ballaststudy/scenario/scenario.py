@@ -117,8 +117,7 @@ def conditioned_rig(kind, rig_config, conditions=None, mode=None, conditions_fil
             params.take_conditions(conditions)
         except ValueError as err:     # a bound of the test against the config's other bound
             raise ConfigError(conditions_file, None, str(err)) from None
-        if kind == "biaxial":       # a box test is loaded as measured: nothing to map
-            record = mapping.apply(params)
+        record = mapping.apply(params)      # a box stage's is none (mapping.stage_mapping)
     if mode:
         params.mode = mode      # biaxial only: the caller checks
     return params, record
