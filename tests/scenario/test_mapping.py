@@ -14,6 +14,8 @@ import xarray as xr
 import yaml
 
 from ballaststudy.config import load_config
+from ballaststudy.rig.biaxial import BiaxialParams, assemble_biaxial
+from ballaststudy.rig.library import load_library
 from ballaststudy.rig.biaxial.strength import StrengthResult, strength_dataset, strength_envelope
 from ballaststudy.schema import ConfigError
 from ballaststudy.scenario.mapping import StressMapping, mapping_from_config, mapping_markdown, stage_mapping
@@ -127,8 +129,6 @@ def test_refusals_name_what_is_missing(tmp_path, envelope):
 
 @pytest.fixture(scope="module")
 def biaxial_specimen(small_library, tmp_path_factory):
-    from ballaststudy.rig.biaxial import BiaxialParams, assemble_biaxial
-    from ballaststudy.rig.library import load_library
     p = BiaxialParams(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000, fill_area_ratio=0.9)
     path = tmp_path_factory.mktemp("mapping") / "assembled.nc"
     assemble_biaxial(load_library(small_library), p, seed=7).save(path)
