@@ -87,6 +87,7 @@ def test_loop_end_to_end(tiny, tmp_path):
         assert list(ds["effect"].values) == ["end_restraint"] and ds.attrs["untestable_effects"] == "fouling"
         assert ds["plain"].attrs["units"] == "1" and ds.attrs["Conventions"] == "CF-1.8"
         assert ds.attrs["stress_mapping"] == "none" and len(json.loads(ds.attrs["stress_mapping_json"])) == 3
+        assert ds.attrs["likelihood"] == "multivariate t with dof = 1"       # K - 1, K = 2 specimens
         cands = json.loads(ds.attrs["candidates_json"])
         tests = json.loads(ds.attrs["tests_json"])
     assert all(np.isfinite(t["mean_coordination"]) and t["mean_coordination"] > 1 for t in tests)

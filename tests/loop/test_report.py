@@ -107,8 +107,10 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert list(ds["effect_parameter"].values[0]) == ["platen_friction"] and ds.attrs["chosen"] == "end_restraint"
     assert ds.attrs["untestable_effects"] == "fouling" and ds["cycle"].values.tolist() == [1.0, 2.0, 3.0]
     assert ds.attrs["stress_mapping"] == "none"
+    assert ds.attrs["likelihood"] == "multivariate t with dof = 1"      # K - 1, K = 2 specimens
     text = report_markdown(run, stats)
     assert "Stress mapping: **none**" in text
+    assert "likelihood: multivariate t with dof = 1 (K - 1:" in text
     assert "16 DEM cases (0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
     assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] |" in text
     assert "| 0.01 | 2 | chosen |" in text                   # held-out RMSE, cut / scatter sqrt(4), verdict

@@ -38,7 +38,7 @@ from ..scenario.runner import check_backend
 from .horizon import chosen_for
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
-from .select import choose, held_out_plain, judge_candidate, residual_covariances, scatter_mse
+from .select import choose, held_out_plain, judge_candidate, residual_covariances, residual_dof, scatter_mse
 
 # the chaos probe's velocity perturbation (specimen_share 0): far below any physical speed
 # of the test; the chaos it starts is saturated - runs perturbed by 1e-9, 1e-6 and 1e-4 m/s
@@ -154,10 +154,11 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
     (select.residual_covariances)."""
     covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
                                             probe_at)
-    plain = held_out_plain(plain_at, y, point_test, plain_covs)
+    dof = residual_dof(len(plain_at), lp["specimen_share"])      # one chaos probe
+    plain = held_out_plain(plain_at, y, point_test, plain_covs, dof)
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
-        args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed)
+        args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed, dof)
         out[name] = Candidate(thetas, at, *judge_candidate(*args), evaluate)
     return out, plain, scatter_mse(plain_covs)
 

@@ -8,6 +8,7 @@ import xarray as xr
 
 from ..metrics.output import VARIABLES
 from ..scenario.mapping import mapping_kinds
+from .select import likelihood_words
 
 CF = "CF-1.8"
 
@@ -33,7 +34,8 @@ def loop_dataset(run, stats):
                "tests_json": json.dumps(stats.before), "covariate_tests_json": json.dumps(stats.covariates),
                "candidates_json": json.dumps(stats.candidates), "chosen": sel.chosen or "none",
                "material_parameters_json": json.dumps(run.base),
-               "untestable_effects": ", ".join(sel.untestable) or "none", **_long_term_attrs(run.long_term_law),
+               "untestable_effects": ", ".join(sel.untestable) or "none",
+               "likelihood": likelihood_words(run.likelihood_dof), **_long_term_attrs(run.long_term_law),
                **_mapping_attrs(run.mapping or {})})
 
 

@@ -6,7 +6,7 @@ import numpy as np
 from ..metrics.output import display_scale
 from ..scenario.mapping import mapping_markdown
 from ..scenario.modifiers import MODIFIERS
-from .select import ALPHA
+from .select import ALPHA, likelihood_words
 from .horizon import STATED_QUANTILE
 from .statistics import SIGNALS
 
@@ -68,13 +68,15 @@ def _covariates(stats):
     return lines
 
 
-def _noise_words(lp):
+def _noise_words(run):
+    lp, dof = run.settings, likelihood_words(run.likelihood_dof)
     if lp["specimen_share"] == 0:
         return ("the measured curves are taken as runs of the model's own specimens, so the scatter is "
                 "chaos / K: the plain ensemble run again from velocities perturbed by round-off size "
-                "(the chaos probe), plus the measurement's.")
+                f"(the chaos probe), plus the measurement's; likelihood: {dof} (K x 1 probe).")
     return (f"the measured specimen scatters like {lp['specimen_share']:g} x one of the plain model's, "
-            "plus 1/K of that for the ensemble mean, plus the measurement's.")
+            f"plus 1/K of that for the ensemble mean, plus the measurement's; likelihood: {dof} (K - 1: "
+            "the case-to-case covariance rests on the K specimens every set runs).")
 
 
 def _verdict_of(c, candidates):
@@ -100,7 +102,7 @@ def _candidates(run, stats, scale, unit):
     lines = ["", "## Candidate effects, judged on held-out tests", "",
              "Each test left out once: the effect's parameter fitted on the others, the left-out test's "
              "points predicted. Gain = sum over tests of held-out log predictive density minus the plain "
-             "model's, every model under one noise model: " + _noise_words(run.settings)
+             "model's, every model under one noise model: " + _noise_words(run)
              + f" Rule: one-sided Wilcoxon signed-rank test of the per-test gains, p < {ALPHA:g} / "
              f"{len(cands)} (candidates), and a held-out cut beyond the scatter: the plain model's held-out "
              "mean squared error minus the effect's exceeds the squared residual a correct model expects under "

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .select import residual_dof
+
 
 @dataclass(frozen=True)
 class Targets:
@@ -76,6 +78,12 @@ class LoopRun:
     def cases(self):
         """K: the specimens, each run under every test by every model."""
         return self.plain.runs["curves"].shape[1]
+
+    @property
+    def likelihood_dof(self):
+        """The likelihood's t degrees of freedom (select.residual_dof; the loop runs one
+        chaos probe)."""
+        return residual_dof(self.cases, self.settings["specimen_share"])
 
     @property
     def dem_cases(self):
