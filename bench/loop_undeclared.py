@@ -9,7 +9,7 @@ other parameter values can beat - where it exceeds half the plain model's RMSE, 
 of halving is out of reach at that scale. The scenarios' model runs share one case cache.
 The slow test tests/loop/test_undeclared.py asserts the same scenarios at their defaults.
 
-    python bench/loop_undeclared.py OUT_DIR [none rate abrasion fouling end_restraint]
+    python bench/loop_undeclared.py OUT_DIR [none rate abrasion fouling end_restraint stiffer_contact]
         [--cases K] [--cycles N] [--design-sets S] [--refine-rounds R] [--refine-sets S]
         [--stones M --stone-size LO HI --ball-radius R]   # the library (m)
         [--size-m W H]   # the specimens' width and height (m)
@@ -32,8 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # the planted scenarios are a test helper (tests/loop/synthetic.py), not part of the package;
 # it imports its sibling helpers relatively, so it is imported as tests.loop.synthetic
 sys.path.insert(0, str(ROOT))
-from tests.loop.synthetic import (NOISE_SHARE, PLANTED, SCENARIO_BASE, SCENARIO_TESTS,  # noqa: E402
-                                  irreducible_rmse, run_scenario, scenario_setup, truth_runs)
+from tests.loop.synthetic import (NOISE_SHARE, OUT_OF_LIBRARY, PLANTED, SCENARIO_BASE,  # noqa: E402
+                                  SCENARIO_TESTS, irreducible_rmse, run_scenario, scenario_setup, truth_runs)
 
 
 def per_test_rmse(loop_nc, effect):
@@ -67,7 +67,7 @@ def attainable(out, name, specimens, cycles, plain_per_test, plain, probes):
 def parse():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("out", type=Path)
-    ap.add_argument("scenarios", nargs="*", default=list(PLANTED))
+    ap.add_argument("scenarios", nargs="*", default=list(PLANTED), choices=[*PLANTED, *OUT_OF_LIBRARY])
     ap.add_argument("--cases", type=int, default=3)
     ap.add_argument("--cycles", type=int, default=24)
     ap.add_argument("--design-sets", type=int, default=9)
@@ -102,14 +102,14 @@ if __name__ == "__main__":
     for name in args.scenarios:
         t0 = time.time()
         chosen, candidates, plain = run_scenario(args.out, name, specimens, args.cycles, fresh)
-        print(f"planted {name} {PLANTED[name]} -> chosen {chosen} | plain RMSE {plain:.2e} | "
+        print(f"planted {name} {PLANTED.get(name, OUT_OF_LIBRARY.get(name))} -> chosen {chosen} | plain RMSE {plain:.2e} | "
               f"{(time.time() - t0) / 60:.1f} min", flush=True)
         for c in candidates:
             print(f"    {c['effect']:13s} gain {c['gain']:9.3g}  {c['wins']}/{c['tests']} better  p {c['p']:.2g}  "
                   f"cut/scatter {c['mse_cut'] / c['scatter_mse']:+.2f}  "
                   f"held-out RMSE {c['held_out_rmse']:.2e}  fitted {np.round(c['mean'], 3).tolist()} "
                   f"(90 % {np.round(c['interval90'], 3).tolist()})", flush=True)
-        if name != "none":
+        if name in PLANTED and name != "none":
             r = per_test_rmse(args.out / name / "loop" / "loop.nc", name)
             print(f"    per test, {name}'s held-out RMSE / the plain model's: "
                   + " ".join(f"{b / a:.2f}" for a, b in r) + "; plain RMSE " + " ".join(f"{a:.1e}" for a, _ in r),

@@ -29,6 +29,7 @@ from ballaststudy.calibration.bayes import rmse
 from ballaststudy.calibration.evaluate import Evaluator
 from ballaststudy.scenario.results import at_points
 from ballaststudy.cli import main
+from ballaststudy.dem.materials import ContactMaterial
 from ballaststudy.loop.select import chaos_covariance
 from ballaststudy.measured.importer import import_test
 from ballaststudy.rig.library import synthetic_library
@@ -147,6 +148,9 @@ SCENARIO_TESTS = tuple(PlantedTest(p, 10.0, 50.0, f, vci) for p, f, vci in zip(
 SCENARIO_BASE = {"F_str_co": 1.0}
 PLANTED = {"none": {}, "rate": {"contact_damping_ratio": 0.3}, "abrasion": {"wear_per_cycle": 0.12},
            "fouling": {"friction_loss": 0.6}, "end_restraint": {"platen_friction": 0.2}}
+# A change no candidate makes (issue 34's out-of-library control): the stones' contact twice
+# as stiff as Table 4.2's, planted as a material parameter the loop's plain model keeps.
+OUT_OF_LIBRARY = {"stiffer_contact": {"E_star": 2 * ContactMaterial().E}}
 
 
 SCENARIO_LIBRARY = dict(n_stones=24, size=(0.035, 0.065), r0=0.008, seed=3, database="tiny")
@@ -187,13 +191,18 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
 
 
 def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, seed=0):
-    """Plant SCENARIO_TESTS with effect ``name`` (PLANTED; "none": the plain model) and run
-    the loop on them, its cases cached in ``folder``/cases (shared by the scenarios).
-    Returns (chosen effect or None, the candidates' evidence, the plain model's RMSE)."""
+    """Plant SCENARIO_TESTS with effect ``name`` (PLANTED; "none": the plain model) or a
+    material change (OUT_OF_LIBRARY) and run the loop on them, its cases cached in
+    ``folder``/cases (shared by the scenarios). Returns (chosen effect or None, the
+    candidates' evidence, the plain model's RMSE)."""
     folder = Path(folder)
+    if name in OUT_OF_LIBRARY:
+        effect, values, base = None, {}, {**SCENARIO_BASE, **OUT_OF_LIBRARY[name]}
+    else:
+        effect, values, base = None if name == "none" else name, PLANTED[name], SCENARIO_BASE
     measured, conditions = plant(folder / name / "tests", SCENARIO_TESTS, truth_specimens or specimens,
-                                 folder / "config.yaml", cycles, None if name == "none" else name,
-                                 PLANTED[name], SCENARIO_BASE, seed=seed, cache=folder, jobs=jobs)
+                                 folder / "config.yaml", cycles, effect, values, base, seed=seed, cache=folder,
+                                 jobs=jobs)
     out = folder / name / "loop"
     out.mkdir(parents=True, exist_ok=True)
     if not (out / "cases").exists():
