@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 import sys
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,8 @@ import xarray as xr
 import yaml
 
 from ballaststudy.cli import main
+from ballaststudy.config import load_config
+from ballaststudy.rig.kinds import params_from_config
 
 from ..biaxial_fast import FAST_LOADING
 
@@ -164,7 +167,7 @@ def test_the_cuda_backend_is_refused_without_a_gpu(tmp_path):
     assert not out.exists()
 
 
-def _workflow(tmp_path, change):
+def _workflow(tmp_path, change, *options):
     for part in ("Snakefile", "workflow", "config"):
         src = ROOT / part
         (shutil.copytree(src, tmp_path / part) if src.is_dir() else shutil.copy(src, tmp_path))
@@ -173,7 +176,7 @@ def _workflow(tmp_path, change):
     cfg["measured"]["data_dir"] = str(ROOT / cfg["measured"]["data_dir"])
     change(cfg["loop"])
     path.write_text(yaml.safe_dump(cfg))
-    return subprocess.run(["snakemake", "--cores", "1", "-n", "-p", "loop"], cwd=tmp_path,
+    return subprocess.run(["snakemake", "--cores", "1", "-n", "-p", "loop", *options], cwd=tmp_path,
                           capture_output=True, text=True)
 
 
@@ -185,6 +188,22 @@ def test_snakefile_plans_the_loop(tmp_path):
     assert "rule specimen_assemble:" in out.stdout and "ballaststudy loop results/measured/" in out.stdout
     assert "ballaststudy horizon results/measured/" in out.stdout and "--fit-cycles 1000 10000" in out.stdout
     assert "--horizon results/horizon/horizon.nc" in out.stdout
+
+
+def test_the_scale_config_plans_the_loop_on_full_size_specimens(tmp_path):
+    """config/loop_scale.yaml (issue 34): config.yaml's loop to N = 2000 in real time on six
+    0.30 x 0.60 m specimens; read alone (as the stages' command lines read it) it differs
+    from config.yaml in those keys only."""
+    if not (ROOT / "../shared/data/measured").is_dir():
+        pytest.skip("the shared measured data are not here (the loop's tests are imported from them)")
+    out = _workflow(tmp_path, lambda c: None, "--configfile", "config/loop_scale.yaml")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.count("rule specimen_assemble:") == 6 and "results_loop_scale/specimens/biaxial_full/case5.nc" in out.stdout
+    scale, default = load_config(ROOT / "config/loop_scale.yaml"), load_config(ROOT / "config/config.yaml")
+    assert (scale["loop"]["cycles"], scale["loop"]["cases"]) == (2000, 6)
+    assert asdict(params_from_config("biaxial", scale["rig"])) == {
+        **asdict(params_from_config("biaxial", default["rig"])), "mode": "real_time"}
+    assert scale["bpm"] == default["bpm"] and scale["loop"]["targets"] == default["loop"]["targets"]
 
 
 @pytest.mark.parametrize("change, message", [
