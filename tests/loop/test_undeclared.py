@@ -25,6 +25,16 @@ the truth's specimens at p = 25 kPa (t2) creep to 1.7 % axial strain in 24 cycle
 under the servo), an error no candidate fits. The design is not re-tuned here: a design
 whose tests all carry the signal is issue 34's.
 
+Measured 2026-11-28 (the code of 0689d8c: the loop's t likelihood, 3 dof with one chaos probe
+of 3 specimens; 1 h 29 min on 2 cores beside other jobs): rate still FAILS (4/8 better, p
+0.371, held-out RMSE -50 %, fitted 0.476 [0.473, 0.480] for 0.30); abrasion chosen (8/8,
+-92 %, 0.122 [0.119, 0.125] for 0.12); fouling chosen (8/8, -98 %, 0.604 [0.603, 0.604] for
+0.60); end restraint chosen (8/8, -67 %, 0.208 [0.205, 0.211] for 0.20); the negative
+control and the out-of-library control (every candidate 0-3 of 8 better) choose nothing.
+The out-of-library control is weak at this scale: twice the contact stiffness moves the
+curves by an RMSE of 4.4e-6, a quarter of abrasion's 1.8e-5 (rate 4.0e-3, fouling
+1.8e-3, end restraint 7.4e-5).
+
 Without refinement (the 9-set grid alone) end restraint's held-out RMSE fell by 21 % only,
 its fit 0.30 +- 0.002: lubricated platens make the p = 25 kPa test's specimens nearly give
 way, the response has a cliff between the grid's 0.15 and 0.30, and the posterior snapped
