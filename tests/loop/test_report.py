@@ -85,7 +85,7 @@ def _chosen_run():
     evidence = dict(gain=5.0, se=1.0, z=5.0, wins=2, tests=2, p=0.01, mse_cut=4e-8, scatter_mse=1e-8)
     selection = Selection({"end_restraint": candidate}, {"end_restraint": evidence}, "end_restraint", after, ["fouling"])
     plain_model = PlainModel(plain, TARGETS.y + 2e-4, HeldOut(np.array([0.5, 1.5]), TARGETS.y + 2e-4, np.zeros((2, 0))))
-    run = LoopRun(SETTINGS, TARGETS, plain_model, selection, {}, minutes=0.5)
+    run = LoopRun(SETTINGS, TARGETS, plain_model, selection, {}, minutes=0.5, likelihood_dof=1.0)
     rows = [dict(test=name, source="planted", points=3, rmse=2e-4 * (j + 1), bias=1e-4, bias_p=0.5, slope_ln_n=0.0,
                  slope_p=np.nan) for j, name in enumerate(TARGETS.names)]
     no_fit = LongTerm(np.zeros(0), np.zeros(0), np.zeros(0), None)
@@ -125,7 +125,7 @@ def test_the_long_term_law_in_every_output(tmp_path):
     its N_fit; loop.nc records it; curves.png's scale is set by what was measured and
     simulated, never by an extrapolation that runs away (the issue's 400,000 % figure)."""
     run, stats = _chosen_run()
-    run = LoopRun(run.settings, run.targets, run.plain, run.selection, run.base, run.minutes, long_term_law=LAW)
+    run = dataclasses.replace(run, long_term_law=LAW)
     beyond = [(np.array([100.0, 5e5]), np.array([0.004, 0.006]))] * 2
     stats = LoopStatistics(stats.before, stats.after, [], stats.candidates,
                            long_term(beyond, run.cycles, run.plain.runs["curves"], LAW),
@@ -147,8 +147,7 @@ def test_the_long_term_law_in_every_output(tmp_path):
 
 def test_no_effect_chosen():
     run, stats = _chosen_run()
-    run = LoopRun(run.settings, run.targets, run.plain, Selection(run.selection.candidates, run.selection.evidence),
-                  run.base, run.minutes)
+    run = dataclasses.replace(run, selection=Selection(run.selection.candidates, run.selection.evidence))
     stats = LoopStatistics(stats.before, None, [], candidate_rows(run.selection, TARGETS), stats.long_term, None,
                            stats.plain_rmse)
     assert chosen_doc(stats, {"mu": 0.5}) == {"effect": "none", "parameters": {}, "interval90": {},

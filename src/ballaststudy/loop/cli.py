@@ -133,10 +133,10 @@ class Candidate:
     evaluate: object         # its calibration.evaluate.Evaluator (sets: every run, design first)
 
 
-def _refine(runs, plain_at, probe_at, y, point_test, lp, seed):
+def _refine(runs, plain_at, probe_at, y, point_test, lp, seed, dof):
     """_judge after ``refine_rounds`` rounds of refined_design sets added to every
     candidate's runs (in place; the grid's spacing halved each round)."""
-    candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
+    candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof)
     for r in range(lp["refine_rounds"]):
         for name, (thetas, at, evaluate) in runs.items():
             lower, upper = _bounds(name)
@@ -144,17 +144,16 @@ def _refine(runs, plain_at, probe_at, y, point_test, lp, seed):
             new = refined_design(candidates[name].held.theta_mean, lower, upper, spacing, lp["refine_sets"],
                                  job_seed(seed, f"loop/{name}/refine{r}"))
             runs[name] = (np.vstack([thetas, new]), at + evaluate(new), evaluate)
-        candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed)
+        candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof)
     return candidates, plain, scatter
 
 
-def _judge(runs, plain_at, probe_at, y, point_test, lp, seed):
+def _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof):
     """({effect: Candidate}, the plain model's select.HeldOut, its scatter_mse): every
     candidate and the plain model under one noise model, made from the plain runs
-    (select.residual_covariances)."""
+    (select.residual_covariances), its t with ``dof`` degrees of freedom."""
     covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
                                             probe_at)
-    dof = residual_dof(len(plain_at), lp["specimen_share"])      # one chaos probe
     plain = held_out_plain(plain_at, y, point_test, plain_covs, dof)
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
@@ -204,7 +203,8 @@ def _loop(args):
     conditions = [load_conditions(c) for c in args.conditions]
     untestable = [e for e in lp["effects"] if not MODIFIERS[e].testable(conditions)]
     runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
-    candidates, plain, scatter = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"])
+    dof = residual_dof(len(plain_at), lp["specimen_share"])      # the loop runs one chaos probe
+    candidates, plain, scatter = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"], dof)
     chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, scatter)
     after = None
     if chosen:
@@ -216,7 +216,7 @@ def _loop(args):
         lp, targets,
         PlainModel(plain_eval.sets[0], plain_at.mean(axis=0), plain, probe_set),
         Selection(candidates, evidence, chosen, after, untestable), base, minutes=(time.time() - t0) / 60,
-        long_term_law=long_term_law, mapping=plain_eval.mapping_records()))
+        likelihood_dof=dof, long_term_law=long_term_law, mapping=plain_eval.mapping_records()))
     recorder.finish()
     sets = plain_eval.sets + (probe_eval.sets if probe_eval else []) + [st for c in candidates.values() for st in c.evaluate.sets]
     cases = [f for st in sets for per_test in st["cases"] for f in per_test]  # this run's sets

@@ -8,8 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .select import residual_dof
-
 
 @dataclass(frozen=True)
 class Targets:
@@ -66,6 +64,7 @@ class LoopRun:
     selection: Selection
     base: dict                 # the plain model's material parameters ({}: Table 4.2's)
     minutes: float             # wall time of this run
+    likelihood_dof: float      # the likelihood's t degrees of freedom (select.residual_dof)
     long_term_law: object = None   # horizon.LongTermLaw the measured curves chose; None: none given
     mapping: dict = None       # {test: the stress mapping's record} (scenario.mapping); None: none
 
@@ -78,12 +77,6 @@ class LoopRun:
     def cases(self):
         """K: the specimens, each run under every test by every model."""
         return self.plain.runs["curves"].shape[1]
-
-    @property
-    def likelihood_dof(self):
-        """The likelihood's t degrees of freedom (select.residual_dof; the loop runs one
-        chaos probe)."""
-        return residual_dof(self.cases, self.settings["specimen_share"])
 
     @property
     def dem_cases(self):
