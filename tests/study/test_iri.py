@@ -12,7 +12,7 @@ import xarray as xr
 from ballaststudy.config import ConfigError
 from ballaststudy.study import iri_table, stats, write_iri
 from ballaststudy.study.cli import register
-from ballaststudy.study.iri import scale_note
+from ballaststudy.study.iri import THESIS_IRI, scale_note, thesis_mark, thesis_table
 
 
 def planted(n_db=6, n_case=5, n_cycle=4, seed=1):
@@ -97,13 +97,15 @@ def test_verdicts_kept_below_the_thesis_scale():
 def test_write_iri_files_and_cli(tmp_path):
     study = planted()
     paths = write_iri(study, tmp_path / "iri", n_boot=200)
-    assert [p.name for p in paths] == ["iri.csv", "iri.md", "iri_heatmap.png"]
+    assert [p.name for p in paths] == ["iri.csv", "iri_thesis.csv", "iri.md", "iri_heatmap.png"]
     assert len(pd.read_csv(paths[0])) == 20
-    md = paths[1].read_text()
+    assert len(pd.read_csv(paths[1])) == 10
+    md = paths[2].read_text()
+    assert "## Beside thesis Table 5-2" in md and "not decidable at this scale" in md
     assert "Verdict rule" in md and "|rho| >= 0.3" in md and "IRI_BS-GP" in md
     assert md.splitlines()[2].startswith("**Far below the thesis' scale.** This study ran 5 cases per database "
                                          "and 4 load cycles per case")
-    assert paths[2].stat().st_size > 1000
+    assert paths[3].stat().st_size > 1000
     # CLI: a study file without the behaviours is refused with its name
     bad = tmp_path / "not_a_study.nc"
     study.drop_vars("void_ratio").to_netcdf(bad)
@@ -115,3 +117,29 @@ def test_write_iri_files_and_cli(tmp_path):
     with pytest.raises(SystemExit):     # refused by the parser (argtypes), before any work
         p.parse_args(["study", "iri", str(bad), "--out", str(tmp_path / "x"), "--resamples", "5"])
     assert not (tmp_path / "x").exists()
+
+
+def test_thesis_marks_on_planted_relations():
+    # planted(): GP and BS rise together; FPA changes the more, the more the case settles (its
+    # sd over cycles ~ 0.8 x final settlement); VR and BR independent of everything
+    table = thesis_table(planted(n_case=10, n_cycle=100), n_boot=500, seed=2).set_index("iri")
+    assert len(table) == 10 and set(table.index) == {f"IRI_{a}-{b}" for a, b, *_ in THESIS_IRI}
+    assert table.loc["IRI_BS-GP", ["verdict", "mark"]].tolist() == ["positive", "holds"]
+    # the thesis' "radically changing" angle: settlement against the angle's sd over cycles
+    assert table.loc["IRI_BS-FPA", ["quantity_b", "verdict", "mark"]].tolist() == ["variability", "positive", "holds"]
+    assert table.loc["IRI_GP-FPA", ["verdict", "mark"]].tolist() == ["positive", "holds"]
+    for iri in ("IRI_BS-VR", "IRI_GP-VR"):       # thesis: negative; planted: none
+        assert table.loc[iri, ["verdict", "mark"]].tolist() == ["none", "does not hold"], iri
+    for iri in ("IRI_BS-BR", "IRI_BR-GP", "IRI_BR-FPA", "IRI_BR-VR", "IRI_FPA-VR"):   # thesis and planted: none
+        assert table.loc[iri, ["verdict", "mark"]].tolist() == ["none", "holds"], iri
+    assert (table["mark"] == table["mark_by_rule"]).all()
+
+
+def test_thesis_marks_rule_and_scale():
+    assert thesis_mark("negative", "negative") == "holds"
+    assert thesis_mark("negative", "positive") == "does not hold"
+    assert thesis_mark("none", "negative") == "does not hold"
+    assert thesis_mark("positive", "not decidable") == "not decidable"
+    short = thesis_table(planted(n_case=5, n_cycle=4), n_boot=300, seed=2).set_index("iri")
+    assert short.loc["IRI_BS-GP", ["verdict", "mark", "mark_by_rule"]].tolist() == \
+        ["positive", "not decidable at this scale", "holds"]

@@ -20,6 +20,7 @@ rule study_iri:
         f"{RESULTS}/study.nc",
     output:
         csv=f"{RESULTS}/study/iri/iri.csv",
+        thesis=f"{RESULTS}/study/iri/iri_thesis.csv",
         md=f"{RESULTS}/study/iri/iri.md",
         heatmap=report(f"{RESULTS}/study/iri/iri_heatmap.png", caption="../report/iri.rst", category="Study"),
     params:

@@ -14,11 +14,39 @@ from matplotlib.figure import Figure
 
 from ..atomic import atomic_path
 from . import scale, stats
+from .optimise import FAILS, HOLDS, UNDECIDED, UNDECIDED_AT_SCALE
 
 # thesis abbreviation -> study.nc variable
 IRI_BEHAVIOURS = {"BS": "settlement", "BR": "breakage_rate", "GP": "ghost_particles", "FPA": "fpa",
                   "VR": "void_ratio"}
 KINDS = {"final": stats.final_value, "change": stats.change_value}
+THESIS_CSV = "iri_thesis.csv"
+QUANTITIES = {"final": stats.final_value, "variability": stats.variability_value}
+
+# Table 5-2 holds only symbols; thesis 5.7's text says what each pair does. Per pair: the
+# relation it states, the per-case quantity of each behaviour its sentence speaks of (final:
+# after the loading; variability: sd over the cycles, its "radically / drastically changing"),
+# and its words, shortened.
+THESIS_IRI = [
+    ("BS", "BR", "none", "final", "final", "not shown in the simulation: breakages too rare"),
+    ("BS", "GP", "positive", "final", "final", "the more ghost particles, the higher the settlement after loading"),
+    ("BS", "FPA", "positive", "final", "variability",
+     "a high settlement radically changes the force propagation angle; a low one keeps it stable"),
+    ("BS", "VR", "negative", "final", "final", "a high settlement indicates a low void ratio"),
+    ("BR", "GP", "none", "final", "final", "no relationship found (breakages too rare)"),
+    ("BR", "FPA", "none", "final", "final", "no relationship found (breakages too rare)"),
+    ("BR", "VR", "none", "final", "final", "no relationship found (breakages too rare)"),
+    ("GP", "FPA", "positive", "variability", "variability",
+     "a drastically changing number of ghost particles goes with a drastically changing angle"),
+    ("GP", "VR", "negative", "final", "final", "many ghost particles, a low void ratio"),
+    ("FPA", "VR", "none", "final", "final", "no direct relationship"),
+]
+THESIS_RULE = ("the thesis' relation against our verdict on the quantities its sentence names: holds if they "
+               "are equal; does not hold if ours is another of positive / negative / none; not decidable if "
+               "ours is; far below the thesis' scale every holds / does not hold becomes "
+               f"\"{UNDECIDED_AT_SCALE}\"")
+THESIS_COLUMNS = ["iri", "thesis", "quantity_a", "quantity_b", "n", "spearman_rho", "spearman_lo", "spearman_hi",
+                  "verdict", "mark", "mark_by_rule", "thesis_words"]
 COLUMNS = ["iri", "a", "b", "kind", "n", "pearson_r", "pearson_lo", "pearson_hi", "pearson_p",
            "spearman_rho", "spearman_lo", "spearman_hi", "spearman_p", "verdict"]
 
@@ -41,6 +69,32 @@ def iri_table(study, n_boot=2000, seed=0, min_abs_rho=stats.MIN_ABS_RHO):
     return pd.DataFrame(rows)[COLUMNS]
 
 
+def thesis_mark(thesis, ours):
+    """THESIS_RULE's mark of our verdict against the thesis' relation (before the scale)."""
+    if ours == "not decidable":
+        return UNDECIDED
+    return HOLDS if ours == thesis else FAILS
+
+
+def thesis_table(study, n_boot=2000, seed=0, min_abs_rho=stats.MIN_ABS_RHO):
+    """DataFrame, one row per pair of THESIS_IRI: our correlation of the quantities the thesis'
+    sentence names, our verdict and its mark against the thesis' relation."""
+    far = scale.far_below(*scale.extent(study))
+    rows = []
+    for k, (a, b, thesis, qa, qb, words) in enumerate(THESIS_IRI):
+        x = QUANTITIES[qa](study[IRI_BEHAVIOURS[a]].values).ravel()
+        y = QUANTITIES[qb](study[IRI_BEHAVIOURS[b]].values).ravel()
+        c = stats.correlation(x, y, n_boot=n_boot, seed=seed + 100 + k)
+        ours = stats.verdict(c, min_abs=min_abs_rho)
+        by_rule = thesis_mark(thesis, ours)
+        mark = UNDECIDED_AT_SCALE if far and by_rule in (HOLDS, FAILS) else by_rule
+        rows.append({"iri": f"IRI_{a}-{b}", "thesis": thesis, "quantity_a": qa, "quantity_b": qb, "n": c["n"],
+                     "spearman_rho": c["spearman_rho"], "spearman_lo": c["spearman_lo"],
+                     "spearman_hi": c["spearman_hi"], "verdict": ours, "mark": mark, "mark_by_rule": by_rule,
+                     "thesis_words": words})
+    return pd.DataFrame(rows)[THESIS_COLUMNS]
+
+
 def _fmt(v, digits=2):
     return "n/a" if not np.isfinite(v) else f"{v:.{digits}f}"
 
@@ -59,7 +113,23 @@ def scale_note(study):
             "samples only; they are not a check of thesis Table 5-2.")
 
 
-def iri_markdown(table, n_boot, seed, min_abs_rho=stats.MIN_ABS_RHO, note=""):
+def thesis_markdown(thesis):
+    """The section setting our verdicts beside thesis 5.7's relations."""
+    lines = ["## Beside thesis Table 5-2", "",
+             "The thesis' relation per pair from its text (5.7), our Spearman's rho of the per-case quantities "
+             "its sentence names (final: at the last run cycle; variability: sd over the run cycles), our "
+             f"verdict and the mark. Mark rule: {THESIS_RULE}.", "",
+             "| IRI | thesis (5.7) | quantities | n | Spearman rho [95 % CI] | ours | mark |",
+             "|---|---|---|---|---|---|---|"]
+    for _, r in thesis.iterrows():
+        mark = f"**{r.mark}**" + (f" (would be: {r.mark_by_rule})" if r.mark != r.mark_by_rule else "")
+        lines.append(f"| {r.iri} | {r.thesis}: {r.thesis_words} | {r.quantity_a} / {r.quantity_b} | {r.n} | "
+                     f"{_fmt(r.spearman_rho)} [{_fmt(r.spearman_lo)}, {_fmt(r.spearman_hi)}] | {r.verdict} | "
+                     f"{mark} |")
+    return lines + [""]
+
+
+def iri_markdown(table, n_boot, seed, min_abs_rho=stats.MIN_ABS_RHO, note="", thesis=None):
     rule = stats.VERDICT_RULE.replace(str(stats.MIN_ABS_RHO), f"{min_abs_rho:g}")
     lines = ["# Interrelationship Index (IRI) of the behaviours (thesis 5.7, Table 5-2)", ""]
     if note:
@@ -79,6 +149,8 @@ def iri_markdown(table, n_boot, seed, min_abs_rho=stats.MIN_ABS_RHO, note=""):
                          f"{_fmt(r.pearson_p, 3)} | {_fmt(r.spearman_rho)} [{_fmt(r.spearman_lo)}, "
                          f"{_fmt(r.spearman_hi)}] | {_fmt(r.spearman_p, 3)} | {r.verdict} |")
         lines.append("")
+    if thesis is not None:
+        lines += thesis_markdown(thesis)
     lines += ["![IRI heatmap](iri_heatmap.png)", ""]
     return "\n".join(lines)
 
@@ -112,14 +184,18 @@ def fig_heatmap(table):
 
 
 def write_iri(study, out_dir, n_boot=2000, seed=0, min_abs_rho=stats.MIN_ABS_RHO):
-    """Write iri.csv, iri.md and iri_heatmap.png into `out_dir` (atomically); return the paths."""
+    """Write iri.csv, iri_thesis.csv, iri.md and iri_heatmap.png into `out_dir` (atomically);
+    return the paths."""
     out = Path(out_dir)
     table = iri_table(study, n_boot=n_boot, seed=seed, min_abs_rho=min_abs_rho)
-    paths = [out / "iri.csv", out / "iri.md", out / "iri_heatmap.png"]
+    thesis = thesis_table(study, n_boot=n_boot, seed=seed, min_abs_rho=min_abs_rho)
+    paths = [out / "iri.csv", out / THESIS_CSV, out / "iri.md", out / "iri_heatmap.png"]
     with atomic_path(paths[0]) as tmp:
         table.to_csv(tmp, index=False)
     with atomic_path(paths[1]) as tmp:
-        tmp.write_text(iri_markdown(table, n_boot, seed, min_abs_rho, scale_note(study)))
+        thesis.to_csv(tmp, index=False)
     with atomic_path(paths[2]) as tmp:
+        tmp.write_text(iri_markdown(table, n_boot, seed, min_abs_rho, scale_note(study), thesis))
+    with atomic_path(paths[3]) as tmp:
         fig_heatmap(table).savefig(tmp, format="png", dpi=130)
     return paths

@@ -50,14 +50,6 @@ def case_table(study):
     return {name: fn(study[var].values) for name, var, fn, _, _ in CRITERIA}
 
 
-def _mean_se(values):
-    n = np.isfinite(values).sum(axis=1)
-    with np.errstate(all="ignore"):
-        mean = np.where(n > 0, np.nansum(values, axis=1) / np.maximum(n, 1), np.nan)
-        sd = np.array([np.std(r[np.isfinite(r)], ddof=1) if k >= 2 else 0.0 for r, k in zip(values, n)])
-    return mean, sd / np.sqrt(np.maximum(n, 1)), n
-
-
 def database_summary(study):
     """DataFrame indexed by database: group, fines, mean size, and per criterion mean, se, n."""
     per_case = case_table(study)
@@ -68,7 +60,7 @@ def database_summary(study):
     df["size_diversity"] = study.size_diversity.values
     df["shape_index"] = study.shape_index.values
     for name, values in per_case.items():
-        m, se, n = _mean_se(values)
+        m, se, n = stats.case_mean_se(values)
         df[name], df[f"{name}_se"], df[f"{name}_n"] = m, se, n
     return df
 

@@ -60,6 +60,16 @@ def variability_value(series):
     return out
 
 
+def case_mean_se(values):
+    """Per row of a (database, case) array: mean over the finite cases, its standard error
+    (sd with ddof 1 / sqrt(n); 0 with one case) and n."""
+    n = np.isfinite(values).sum(axis=1)
+    with np.errstate(all="ignore"):
+        mean = np.where(n > 0, np.nansum(values, axis=1) / np.maximum(n, 1), np.nan)
+        sd = np.array([np.std(r[np.isfinite(r)], ddof=1) if k >= 2 else 0.0 for r, k in zip(values, n)])
+    return mean, sd / np.sqrt(np.maximum(n, 1)), n
+
+
 def _row_pearson(x, y):
     """Pearson r of each row pair of (B, n) arrays."""
     xm = x - x.mean(axis=1, keepdims=True)
