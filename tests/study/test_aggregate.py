@@ -88,7 +88,7 @@ def test_assembly_stages_at_limit_are_counted_and_reported(tmp_path, synth, inpu
     """The rig layout a case's metrics file carries says how many assembly stages stopped
     at their step limit; a file without the record (or no file) gives -1, and the
     report's extent line counts the cases that had one."""
-    from ballaststudy.study.report import _extent
+    from ballaststudy.study.report import extent_line
     metrics, forms = inputs
     for key, limits in ((("G_1-1", 0), ["settle after tamping: ...", "plate: ..."]),
                         (("G_1-1", 1), [])):
@@ -100,7 +100,7 @@ def test_assembly_stages_at_limit_are_counted_and_reported(tmp_path, synth, inpu
     got = ds.assembly_stages_at_limit
     assert got.sel(database="G_1-1").values.tolist() == [2, 0]
     assert got.sel(database="box_test").values.tolist() == [-1, -1]
-    assert "1 of 2 cases were assembled with a stage stopped at its step limit" in _extent(ds)
+    assert "1 of 2 cases were assembled with a stage stopped at its step limit" in extent_line(ds)
 
 
 def test_units_are_converted(tmp_path, synth, inputs):

@@ -1,5 +1,5 @@
 """A provenance record per output: input files with sha256, params (and their hash), seed,
-package version and git commit, library versions, start/end time, host.
+package version and git commit, library versions, start/end time, host and machine.
 
 Records are JSON, stored as the netCDF global attribute `provenance` and beside the output
 as `<output>.prov.json`.
@@ -8,6 +8,7 @@ as `<output>.prov.json`.
 import datetime as _dt
 import hashlib
 import json
+import os
 import platform
 import subprocess
 from importlib import metadata
@@ -50,6 +51,19 @@ def _versions():
     return out
 
 
+def _machine():
+    """What ran the step: processor model (Linux: /proc/cpuinfo), logical CPUs, OS."""
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"processor": model, "cpus": os.cpu_count(), "system": f"{platform.system()} {platform.release()}"}
+
+
 def _now():
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
@@ -68,6 +82,7 @@ class Recorder:
             "libraries": _versions(),
             "python": platform.python_version(),
             "host": platform.node(),
+            "machine": _machine(),
             "started": _now(),
         }
 

@@ -1,4 +1,4 @@
-"""`ballaststudy study ...`: aggregate, iri, optimise. `register(subparsers)` adds the stage to
+"""`ballaststudy study ...`: aggregate, iri, optimise, record. `register(subparsers)` adds the stage to
 the main parser (ballaststudy.cli). Bad input raises ConfigError (file, key, allowed range),
 which the main command prints as one line with exit code 2; no partial outputs are left."""
 
@@ -9,6 +9,7 @@ from ..provenance import Recorder
 from ..inputs import open_netcdf, writable_dir, writable_file
 from .aggregate import BEHAVIOURS, aggregate, identify_metrics
 from .iri import write_iri
+from .record import write_record
 from .report import write_report
 from ..argtypes import SEED, integer, number
 
@@ -74,6 +75,14 @@ def _study_optimise(args):
                            lambda: write_report(study, args.out, args.resamples, args.seed, str(args.study)))
 
 
+def _study_record(args):
+    writable_dir(args.out)
+    command = " ".join(["ballaststudy study record", str(args.results), "--out", str(args.out),
+                        *[f"--time-log {p}" for p in args.time_log or ()]])
+    for path in write_record(args.results, args.out, args.time_log or (), command):
+        print(f"wrote {path}")
+
+
 def _analysis_parser(actions, name, help_text):
     """An action reading STUDY.nc into an output folder with seeded bootstrap intervals."""
     p = actions.add_parser(name, help=help_text)
@@ -105,4 +114,11 @@ def register(subparsers):
 
     o = _analysis_parser(ss, "optimise", "ranking, Pareto set, recommendation, thesis findings, Figs. 5-1 ... 5-6")
     o.set_defaults(func=_study_optimise)
+
+    r = ss.add_parser("record", help="a study's reference record beside thesis ch. 5 (e.g. docs/thesis-scale/)")
+    r.add_argument("results", type=Path, metavar="RESULTS", help="the run's results folder (study.nc, study/, records)")
+    r.add_argument("--out", required=True, type=Path, help="output folder, e.g. docs/thesis-scale")
+    r.add_argument("--time-log", action="append", type=Path, metavar="LOG",
+                   help="a /usr/bin/time -v log of a snakemake command that made the run (repeat for parts)")
+    r.set_defaults(func=_study_record)
     return st

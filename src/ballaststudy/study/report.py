@@ -106,7 +106,8 @@ def report_markdown(ctx, findings, pareto, recommend, figures, study_path=None, 
     return "\n".join(lines)
 
 
-def _extent(study):
+def extent_line(study):
+    """One sentence: databases, cases, cycles run, and assemblies stopped at a step limit."""
     run = scale.cycles_run(study)
     cases = (run > 0).sum(axis=1)
     text = (f"{study.sizes['database']} databases, {int(cases.min())}-{int(cases.max())} cases each, "
@@ -145,7 +146,7 @@ def write_report(study, out_dir, n_boot=2000, seed=0, study_path=None):
             ("findings.csv", lambda p: pd.DataFrame(findings).to_csv(p, index=False)),
             ("findings.json", lambda p: p.write_text(json.dumps(findings, indent=1))),
             ("report.md", lambda p: p.write_text(report_markdown(ctx, findings, pareto, recommend, figures,
-                                                                 study_path, _extent(study),
+                                                                 study_path, extent_line(study),
                                                                  scale_banner(study))))):
         with atomic_path(out / name) as tmp:
             write(tmp)

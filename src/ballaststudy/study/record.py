@@ -1,0 +1,247 @@
+"""A study's reference record (issue 35: docs/thesis-scale/): what a run's outputs say
+against the thesis' chapter 5, written by the program from the run, never by hand.
+
+Reads the results folder (study.nc, the IRI and optimisation outputs, every provenance
+record) and optionally the ``/usr/bin/time -v`` logs of the snakemake commands that made
+it; writes README.md, per_database.csv, stages.csv, the thesis comparisons as CSV and the
+figures as small PNGs."""
+
+import datetime as dt
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from PIL import Image
+
+from ..atomic import atomic_path
+from ..inputs import input_dir, input_file, open_netcdf
+from ..provenance.store import load_records
+from ..schema import ConfigError
+from . import optimise, plots, stats
+from .aggregate import BEHAVIOURS
+from .iri import THESIS_CSV, THESIS_RULE
+from .report import extent_line, scale_banner
+
+# behaviour, column label, factor to the unit shown
+SHOWN = [("settlement", "final settlement (mm)", 1e3), ("breakage_rate", "breakage rate (%)", 100.0),
+         ("ghost_particles", "ghost particles (-)", 1.0), ("fpa", "force propagation angle (deg)", 1.0),
+         ("void_ratio", "void ratio (-)", 1.0)]
+THUMBNAIL_SCALE = 0.45
+# /usr/bin/time -v's lines we keep: label in the log -> our key
+TIME_LINES = {"Command being timed": "command", "Elapsed (wall clock) time (h:mm:ss or m:ss)": "wall",
+              "User time (seconds)": "user_s", "System time (seconds)": "system_s",
+              "Maximum resident set size (kbytes)": "max_rss_kB", "Exit status": "exit_status"}
+
+
+def _need(path, what):
+    return input_file(path, f"expected {what} (run the study first: snakemake ... all)")
+
+
+def _wall_seconds(text):
+    """h:mm:ss or m:ss(.ss) -> seconds."""
+    parts = [float(p) for p in text.split(":")]
+    return sum(p * 60 ** k for k, p in enumerate(reversed(parts)))
+
+
+def read_time_log(path):
+    """The run's command, wall, CPU seconds, peak memory and exit status from a
+    ``/usr/bin/time -v`` log (ConfigError naming the file if it holds none)."""
+    found = {}
+    for line in _need(path, "a /usr/bin/time -v log").read_text(errors="replace").splitlines():
+        label, sep, value = line.strip().rpartition(": ")
+        if sep and label in TIME_LINES:
+            found[TIME_LINES[label]] = value.strip().strip('"')
+    if "wall" not in found:
+        raise ConfigError(path, None, "no 'Elapsed (wall clock) time' line: not a /usr/bin/time -v log")
+    found["wall_s"] = _wall_seconds(found.pop("wall"))
+    found["log"] = str(path)
+    return found
+
+
+def _seconds(record):
+    t0, t1 = (dt.datetime.fromisoformat(record[k]) for k in ("started", "finished"))
+    return (t1 - t0).total_seconds()
+
+
+def stage_table(records):
+    """Per step of the provenance records: jobs, core seconds (sum of each job's start to
+    finish), first start, last finish and the wall span between them."""
+    rows = {}
+    for rec in {id(r): r for r in records.values()}.values():
+        if "started" not in rec:
+            continue
+        row = rows.setdefault(rec["step"], {"step": rec["step"], "jobs": 0, "core_s": 0.0,
+                                            "first_start": rec["started"], "last_finish": rec["finished"]})
+        row["jobs"] += 1
+        row["core_s"] += _seconds(rec)
+        row["first_start"] = min(row["first_start"], rec["started"])
+        row["last_finish"] = max(row["last_finish"], rec["finished"])
+    df = pd.DataFrame(list(rows.values()), columns=["step", "jobs", "core_s", "first_start", "last_finish"])
+    df["span_s"] = [_seconds({"started": a, "finished": b}) for a, b in zip(df.first_start, df.last_finish)]
+    return df.sort_values("first_start").reset_index(drop=True)
+
+
+def per_database(study):
+    """Per database: group, percent passing 22.4 mm, and for each behaviour the mean,
+    standard error and n over cases of its value at each case's last run cycle."""
+    df = pd.DataFrame(index=pd.Index([str(d) for d in study.database.values], name="database"))
+    df["group"] = [str(g) for g in study.group.values]
+    df["percent_passing_22_4mm"] = study.percent_passing_22_4mm.values
+    for var, _, _ in SHOWN:
+        mean, se, n = stats.case_mean_se(stats.final_value(study[var].values))
+        df[var], df[f"{var}_se"], df[f"{var}_n"] = mean, se, n
+    return df
+
+
+def _distinct(records, get):
+    """The distinct values (as text) of ``get(record)`` over the records, None left out."""
+    values = {get(rec) for rec in {id(r): r for r in records.values()}.values()} - {None}
+    return sorted(v if isinstance(v, str) else repr(v) for v in values)
+
+
+def _run_lines(records, logs, study):
+    commits = _distinct(records, lambda r: r["package"].get("git") or "not recorded")
+    hosts = _distinct(records, lambda r: r.get("host", "not recorded"))
+    machines = _distinct(records, lambda r: "{processor}, {cpus} logical CPUs, {system}".format(**r["machine"])
+                         if "machine" in r else "not recorded (records older than the machine field)")
+    lines = ["## The run", "", f"- Extent: {extent_line(study)}",
+             f"- Commit{'s' if len(commits) > 1 else ''} of the outputs: {', '.join(commits)}",
+             f"- Host{'s' if len(hosts) > 1 else ''}: {', '.join(hosts)}; machine: {'; '.join(machines)}"]
+    for log in logs:
+        lines.append(f"- `{log.get('command', '?')}`: wall {log['wall_s'] / 3600:.2f} h, CPU "
+                     f"{(float(log.get('user_s', 'nan')) + float(log.get('system_s', 'nan'))) / 3600:.2f} h, "
+                     f"peak memory {float(log.get('max_rss_kB', 'nan')) / 2**20:.2f} GiB, exit status "
+                     f"{log.get('exit_status', '?')} ({Path(log['log']).name})")
+    if logs:
+        lines.append(f"- Wall time of the commands above, in all: {sum(x['wall_s'] for x in logs) / 3600:.2f} h")
+    else:
+        lines.append("- Wall time: no /usr/bin/time log given (`--time-log`)")
+    return lines + [""]
+
+
+def _stage_lines(stages):
+    lines = ["## Where the time went (provenance records)", "",
+             "Per step: jobs, core hours (each job from its record's start to its finish: a case resumed "
+             "from a checkpoint counts from its resume; the package import, ~2 s a job, is outside), and the "
+             "wall span from the first start to the last finish.", "",
+             "| step | jobs | core h | span h | first start | last finish |", "|---|---|---|---|---|---|"]
+    lines += [f"| {r.step} | {r.jobs} | {r.core_s / 3600:.2f} | {r.span_s / 3600:.2f} | {r.first_start} | "
+              f"{r.last_finish} |" for r in stages.itertuples()]
+    return lines + [f"| all | {int(stages.jobs.sum())} | {stages.core_s.sum() / 3600:.2f} | | | |", ""]
+
+
+def _database_lines(table):
+    head = " | ".join(label for _, label, _ in SHOWN)
+    lines = ["## Per database (mean ± standard error over cases, values at the last run cycle)", "",
+             f"| database | group | passing 22.4 mm (%) | cases | {head} |", "|---" * (4 + len(SHOWN)) + "|"]
+    for db, r in table.iterrows():
+        cells = [f"{r[v] * f:.4g} ± {r[f'{v}_se'] * f:.2g}" for v, _, f in SHOWN]
+        lines.append(f"| {db} | {r.group} | {r.percent_passing_22_4mm:.1f} | {int(r.settlement_n)} | "
+                     + " | ".join(cells) + " |")
+    return lines + [""]
+
+
+def _iri_lines(thesis):
+    lines = ["## IRI beside thesis Table 5-2", "", f"Mark rule: {THESIS_RULE}.", "",
+             "| IRI | thesis (5.7) | quantities | n | Spearman rho [95 % CI] | ours | mark |",
+             "|---|---|---|---|---|---|---|"]
+    for r in thesis.itertuples():
+        lines.append(f"| {r.iri} | {r.thesis}: {r.thesis_words} | {r.quantity_a} / {r.quantity_b} | {r.n} | "
+                     f"{r.spearman_rho:.2f} [{r.spearman_lo:.2f}, {r.spearman_hi:.2f}] | {r.verdict} | "
+                     f"**{r.mark}** |")
+    return lines + [""]
+
+
+def _finding_lines(findings):
+    lines = ["## The thesis' chapter-5 findings", "", "| finding | thesis' claim | our mark | numbers |",
+             "|---|---|---|---|"]
+    lines += [f"| {f.finding} | {f.claim} | **{f.mark}** | {f.numbers} |" for f in findings.itertuples()]
+    return lines + [""]
+
+
+def _optimum_lines(ranking):
+    lines = ["## The optimised aggregate (thesis 5.8)", "",
+             f"Rule: {optimise.RECOMMEND_RULE}; ranking: `ranking.csv` of the run.", "",
+             "| group | ours (rank) | thesis |", "|---|---|---|"]
+    for group, rows in ranking.groupby("group", sort=True):
+        ours = rows[rows.recommended]
+        pick = ", ".join(f"{d} ({int(r['rank'])})" for d, r in ours.iterrows()) or "none"
+        lines.append(f"| {group} | {pick} | {optimise.THESIS_OPTIMUM.get(str(group), 'none named')} |")
+    return lines + [""]
+
+
+def _model_lines(records, study):
+    """Numbers that bear on where we differ from the thesis: resolution, material, breakage."""
+    bpm = [r["params"].get("bpm", {}) for r in records.values() if r["step"] == "bpm build"]
+    radii = sorted({(b.get("radius_min_mm"), b.get("radius_max_mm")) for b in bpm})
+    material = _distinct({k: r for k, r in records.items() if r["step"] == "case run"},
+                         lambda r: r["params"].get("material_parameters"))
+    final_br = stats.final_value(study["breakage_rate"].values)
+    ran = np.isfinite(final_br)
+    broke = int((final_br[ran] > 0).sum())
+    lines = ["## What bears on the differences", "",
+             f"- Ball radii of the bonded stones (bpm): {', '.join(f'{a}-{b} mm' for a, b in radii) or 'not recorded'}"
+             " (the thesis does not give its PFC value).",
+             f"- Material parameters of the cases: {'; '.join(material) or 'not recorded'}.",
+             f"- Breakage: {broke} of {int(ran.sum())} cases broke at least one bond; final breakage rate at most "
+             f"{np.nanmax(final_br) * 100 if ran.any() else float('nan'):.3g} % (the thesis: breakages too rare "
+             "for trends, 5.7)."]
+    return lines + [""]
+
+
+def _thumbnails(sources, out):
+    written = []
+    for src in sources:
+        with Image.open(src) as im, atomic_path(out / src.name) as tmp:
+            im.thumbnail((round(im.width * THUMBNAIL_SCALE), round(im.height * THUMBNAIL_SCALE)),
+                         Image.Resampling.LANCZOS)
+            im.save(tmp, format="PNG", optimize=True)
+        written.append(out / src.name)
+    return written
+
+
+def _banner(study):
+    text = scale_banner(study)
+    return [text, ""] if text else []
+
+
+def _copy(src, dst):
+    with atomic_path(dst) as tmp:
+        shutil.copyfile(src, tmp)
+    return dst
+
+
+def write_record(results_dir, out_dir, time_logs=(), command=None):
+    """Write the record of the study in ``results_dir`` into ``out_dir``; return the paths."""
+    results, out = input_dir(results_dir, "expected a results folder"), Path(out_dir)
+    study = open_netcdf(_need(results / "study.nc", "study.nc"), "study", require=tuple(BEHAVIOURS))
+    iri_thesis = pd.read_csv(_need(results / "study" / "iri" / THESIS_CSV, "the IRI stage's thesis table"))
+    report_dir = results / "study" / "report"
+    findings = pd.read_csv(_need(report_dir / "findings.csv", "the optimisation report's findings"))
+    ranking = pd.read_csv(_need(report_dir / "ranking.csv", "the optimisation report's ranking"), index_col=0)
+    records = load_records(results)
+    logs = [read_time_log(p) for p in time_logs]
+    figures = [_need(report_dir / name, "a figure of the optimisation report") for name in plots.figure_names()]
+    table, stages = per_database(study), stage_table(records)      # everything read: now write
+    out.mkdir(parents=True, exist_ok=True)
+    written = _thumbnails(figures, out)
+    for name, frame in (("per_database.csv", table), ("stages.csv", stages)):
+        with atomic_path(out / name) as tmp:
+            frame.to_csv(tmp, index=name == "per_database.csv")
+        written.append(out / name)
+    written += [_copy(results / "study" / "iri" / THESIS_CSV, out / THESIS_CSV),
+                _copy(report_dir / "findings.csv", out / "findings.csv")]
+    lines = ["# The thesis-scale study beside Wang 2018, chapter 5", "",
+             f"Written by `{command or 'ballaststudy study record'}` from the run's outputs in `{results}`; "
+             "regenerate it, do not edit it.", ""]
+    lines += _banner(study) + _run_lines(records, logs, study) + _stage_lines(stages) + _database_lines(table)
+    lines += _iri_lines(iri_thesis) + _finding_lines(findings) + _optimum_lines(ranking)
+    lines += _model_lines(records, study)
+    lines += ["## Figures (Figs. 5-1 to 5-6 and the fines threshold)", "",
+              f"Curves: mean over cases; bands: {plots.BAND}.", ""]
+    lines += [f"![{p.stem}]({p.name})" for p in written if p.suffix == ".png"] + [""]
+    with atomic_path(out / "README.md") as tmp:
+        tmp.write_text("\n".join(lines))
+    return [out / "README.md"] + written
+

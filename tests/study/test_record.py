@@ -1,0 +1,122 @@
+"""The study's reference record (docs/thesis-scale/, issue 35): read from a run's outputs,
+its numbers equal what the study and the records hold, worked out here by hand."""
+
+import argparse
+import json
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib import image
+
+from ballaststudy.config import ConfigError
+from ballaststudy.study.cli import register
+from ballaststudy.study.record import read_time_log, stage_table
+
+TIME_LOG = """\
+\tCommand being timed: "snakemake --cores 2 --configfile config/thesis.yaml"
+\tUser time (seconds): 7000.50
+\tSystem time (seconds): 199.50
+\tElapsed (wall clock) time (h:mm:ss or m:ss): 1:02:03
+\tMaximum resident set size (kbytes): 2097152
+\tExit status: 0
+"""
+
+
+def _record(step, started, finished, params=None):
+    return {"step": step, "output": {}, "params": params or {}, "params_sha256": "x", "seed": 0,
+            "package": {"name": "ballaststudy", "version": "0", "git": "abc123"}, "host": "h1",
+            "machine": {"processor": "CPU X", "cpus": 2, "system": "Linux"},
+            "started": started, "finished": finished}
+
+
+@pytest.fixture(scope="module")
+def run(thesis_study, tmp_path_factory):
+    """A results folder as the workflow leaves it: study.nc, the IRI and optimisation outputs,
+    and three planted records (two case runs of 100 s and 200 s, one bpm build)."""
+    path, _ = thesis_study
+    res = tmp_path_factory.mktemp("run") / "results"
+    res.mkdir()
+    shutil.copy(path, res / "study.nc")
+    p = argparse.ArgumentParser()
+    register(p.add_subparsers(dest="stage"))
+    for action, out in (("iri", "study/iri"), ("optimise", "study/report")):
+        args = p.parse_args(["study", action, str(res / "study.nc"), "--out", str(res / out), "--resamples", "200"])
+        args.func(args)
+    material = {"material_parameters": "table_4_2"}
+    planted = [("cases/a/metrics.nc", _record("case run", "2026-01-01T00:00:00+00:00", "2026-01-01T00:01:40+00:00",
+                                              material)),
+               ("cases/b/metrics.nc", _record("case run", "2026-01-01T00:01:00+00:00", "2026-01-01T00:04:20+00:00",
+                                              material)),
+               ("bpm/a.nc", _record("bpm build", "2025-12-31T23:00:00+00:00", "2025-12-31T23:00:30+00:00",
+                                    {"bpm": {"radius_min_mm": 2.5, "radius_max_mm": 5.0}}))]
+    for rel, rec in planted:
+        side = res / (rel + ".prov.json")
+        side.parent.mkdir(parents=True, exist_ok=True)
+        side.write_text(json.dumps(dict(rec, output={str(res / rel): "0"})))
+    log = res.parent / "thesis.time"
+    log.write_text(TIME_LOG)
+    return p, res, log
+
+
+def test_time_log_and_stages(run, tmp_path):
+    _, res, log = run
+    got = read_time_log(log)
+    assert got["wall_s"] == 3723 and got["command"].startswith("snakemake --cores 2")
+    assert float(got["user_s"]) + float(got["system_s"]) == 7200
+    bad = tmp_path / "not_a_log.txt"
+    bad.write_text("hello\n")
+    with pytest.raises(ConfigError, match="not_a_log.txt.*Elapsed"):
+        read_time_log(bad)
+    from ballaststudy.provenance.store import load_records
+    stages = stage_table(load_records(res)).set_index("step")
+    case = stages.loc["case run"]
+    assert case.jobs == 2 and case.core_s == 300 and case.span_s == 260   # 00:00:00 to 00:04:20
+    assert stages.loc["bpm build", "core_s"] == 30
+    assert stages.index[0] == "bpm build"       # ordered by first start
+
+
+def test_record_numbers_and_files(run, thesis_study, tmp_path):
+    p, res, log = run
+    _, study = thesis_study
+    out = tmp_path / "thesis-scale"
+    args = p.parse_args(["study", "record", str(res), "--out", str(out), "--time-log", str(log)])
+    args.func(args)
+    md = (out / "README.md").read_text()
+    table = pd.read_csv(out / "per_database.csv", index_col=0, dtype={"group": str})
+    # by hand: each case's value at its last cycle (here every case ran all cycles), mean and sd/sqrt(n)
+    final = study["settlement"].values[:, :, -1]
+    assert np.allclose(table["settlement"], final.mean(axis=1))
+    assert np.allclose(table["settlement_se"], final.std(axis=1, ddof=1) / np.sqrt(final.shape[1]))
+    assert (table["settlement_n"] == 4).all() and len(table) == 15
+    db, row = table.index[0], table.iloc[0]
+    assert f"| {db} | {row.group} | {row.percent_passing_22_4mm:.1f} | 4 | {row.settlement * 1e3:.4g} ± " in md
+    # the run: its command, wall and CPU hours from the log; stages from the records
+    assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h, CPU 2.00 h" in md
+    assert "| case run | 2 | 0.08 | 0.07 |" in md and "abc123" in md
+    assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5.0 mm" in md
+    assert "Material parameters of the cases: table_4_2." in md
+    # comparisons beside the thesis, copied from the run's own outputs
+    assert pd.read_csv(out / "iri_thesis.csv").equals(pd.read_csv(res / "study/iri/iri_thesis.csv"))
+    assert pd.read_csv(out / "findings.csv").equals(pd.read_csv(res / "study/report/findings.csv"))
+    assert "## IRI beside thesis Table 5-2" in md and "| IRI_BS-GP | positive:" in md
+    assert "| 1 | " in md and "| G_1-5 |" in md          # the optimum table: group 1, thesis' pick
+    assert md.count("not decidable at this scale") >= 3   # 4 cases x 12 cycles: below the thesis' scale
+    # figures: every report figure, at THUMBNAIL_SCALE of its size
+    for name in ("fig_5-1_settlement.png", "fig_5-6_void_ratio.png", "fig_fines_threshold.png"):
+        big, small = image.imread(res / "study/report" / name), image.imread(out / name)
+        assert abs(small.shape[1] / big.shape[1] - 0.45) < 0.01 and f"]({name})" in md
+    assert md.startswith("# The thesis-scale study") and f"ballaststudy study record {res}" in md
+
+
+def test_record_refuses_an_incomplete_run(run, tmp_path):
+    p, res, _ = run
+    partial = tmp_path / "partial"
+    shutil.copytree(res, partial)
+    (partial / "study/iri/iri_thesis.csv").unlink()
+    out = tmp_path / "out"
+    args = p.parse_args(["study", "record", str(partial), "--out", str(out)])
+    with pytest.raises(ConfigError, match="iri_thesis.csv"):
+        args.func(args)
+    assert not out.exists()
