@@ -97,6 +97,7 @@ def test_record_numbers_and_files(run, thesis_study, tmp_path):
     assert "| case run | 2 | 0.08 | 0.07 |" in md and "abc123" in md
     assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5.0 mm" in md
     assert "Material parameters of the cases: table_4_2." in md
+    assert "The thesis' 15 databases: 15 present\n" in md
     # comparisons beside the thesis, copied from the run's own outputs
     assert pd.read_csv(out / "iri_thesis.csv").equals(pd.read_csv(res / "study/iri/iri_thesis.csv"))
     assert pd.read_csv(out / "findings.csv").equals(pd.read_csv(res / "study/report/findings.csv"))
@@ -120,3 +121,20 @@ def test_record_refuses_an_incomplete_run(run, tmp_path):
     with pytest.raises(ConfigError, match="iri_thesis.csv"):
         args.func(args)
     assert not out.exists()
+
+
+def test_record_of_a_part_names_the_missing_databases(run, thesis_study, tmp_path):
+    p, res, _ = run
+    _, study = thesis_study
+    part = tmp_path / "part"
+    shutil.copytree(res, part)
+    study.isel(database=slice(2, None)).to_netcdf(part / "study.nc")     # G_1-1 and G_1-2 not run yet
+    for action, out in (("iri", "study/iri"), ("optimise", "study/report")):
+        args = p.parse_args(["study", action, str(part / "study.nc"), "--out", str(part / out), "--resamples", "100"])
+        args.func(args)
+    args = p.parse_args(["study", "record", str(part), "--out", str(tmp_path / "out")])
+    args.func(args)
+    md = (tmp_path / "out" / "README.md").read_text()
+    assert "The thesis' 15 databases: 13 present; **missing: G_1-1, G_1-2** (a part of the study)" in md
+    assert "no /usr/bin/time log given" in md
+    assert len(pd.read_csv(tmp_path / "out" / "per_database.csv")) == 13

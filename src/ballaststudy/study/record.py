@@ -18,7 +18,7 @@ from ..atomic import atomic_path
 from ..inputs import input_dir, input_file, open_netcdf
 from ..provenance.store import load_records
 from ..schema import ConfigError
-from . import optimise, plots, stats
+from . import optimise, plots, scale, stats
 from .aggregate import BEHAVIOURS
 from .iri import THESIS_CSV, THESIS_RULE
 from .report import extent_line, scale_banner
@@ -105,7 +105,11 @@ def _run_lines(records, logs, study):
     hosts = _distinct(records, lambda r: r.get("host", "not recorded"))
     machines = _distinct(records, lambda r: "{processor}, {cpus} logical CPUs, {system}".format(**r["machine"])
                          if "machine" in r else "not recorded (records older than the machine field)")
+    names = {str(d) for d in study.database.values}
+    missing = [d for d in scale.THESIS_DATABASES if d not in names]
     lines = ["## The run", "", f"- Extent: {extent_line(study)}",
+             f"- The thesis' {len(scale.THESIS_DATABASES)} databases: {len(scale.THESIS_DATABASES) - len(missing)} "
+             f"present" + (f"; **missing: {', '.join(missing)}** (a part of the study)" if missing else ""),
              f"- Commit{'s' if len(commits) > 1 else ''} of the outputs: {', '.join(commits)}",
              f"- Host{'s' if len(hosts) > 1 else ''}: {', '.join(hosts)}; machine: {'; '.join(machines)}"]
     for log in logs:

@@ -18,6 +18,7 @@ databases."""
 
 import numpy as np
 
+THESIS_DATABASES = [f"G_{g}-{i}" for g in (1, 2, 3) for i in range(1, 6)]   # Table 3-1: 3 groups x 5
 THESIS_CASES = 10
 THESIS_CYCLES = 1000
 MIN_CASES = THESIS_CASES // 2
