@@ -34,7 +34,8 @@ def _record(step, started, finished, params=None):
 @pytest.fixture(scope="module")
 def run(thesis_study, tmp_path_factory):
     """A results folder as the workflow leaves it: study.nc, the IRI and optimisation outputs,
-    and three planted records (two case runs of 100 s and 200 s, one bpm build)."""
+    and planted records: two case runs of 100 s and 200 s (the first beside two outputs), one
+    bpm build."""
     path, _ = thesis_study
     res = tmp_path_factory.mktemp("run") / "results"
     res.mkdir()
@@ -44,13 +45,14 @@ def run(thesis_study, tmp_path_factory):
     for action, out in (("iri", "study/iri"), ("optimise", "study/report")):
         args = p.parse_args(["study", action, str(res / "study.nc"), "--out", str(res / out), "--resamples", "200"])
         args.func(args)
-    material = {"material_parameters": "table_4_2"}
+    material = {"material_parameters": {"E_Pa": 1e9, "mu": 0.7}}
     planted = [("cases/a/metrics.nc", _record("case run", "2026-01-01T00:00:00+00:00", "2026-01-01T00:01:40+00:00",
                                               material)),
                ("cases/b/metrics.nc", _record("case run", "2026-01-01T00:01:00+00:00", "2026-01-01T00:04:20+00:00",
                                               material)),
                ("bpm/a.nc", _record("bpm build", "2025-12-31T23:00:00+00:00", "2025-12-31T23:00:30+00:00",
-                                    {"bpm": {"radius_min_mm": 2.5, "radius_max_mm": 5.0}}))]
+                                    {"bpm": {"radius_min": 2.5e-3, "radius_max": 5e-3}}))]
+    planted.append(("cases/a/case.png", planted[0][1]))   # one job's record beside each of its outputs
     for rel, rec in planted:
         side = res / (rel + ".prov.json")
         side.parent.mkdir(parents=True, exist_ok=True)
@@ -94,9 +96,9 @@ def test_record_numbers_and_files(run, thesis_study, tmp_path):
     assert f"| {db} | {row.group} | {row.percent_passing_22_4mm:.1f} | 4 | {row.settlement * 1e3:.4g} ± " in md
     # the run: its command, wall and CPU hours from the log; stages from the records
     assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h, CPU 2.00 h" in md
-    assert "| case run | 2 | 0.08 | 0.07 |" in md and "abc123" in md
-    assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5.0 mm" in md
-    assert "Material parameters of the cases: table_4_2." in md
+    assert "| case run | 2 | 5.0 | 4.3 |" in md and "abc123" in md
+    assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5 mm" in md
+    assert "Material parameters of the cases: {\"E_Pa\": 1000000000.0, \"mu\": 0.7}." in md
     assert "The thesis' 15 databases: 15 present\n" in md
     # comparisons beside the thesis, copied from the run's own outputs
     assert pd.read_csv(out / "iri_thesis.csv").equals(pd.read_csv(res / "study/iri/iri_thesis.csv"))

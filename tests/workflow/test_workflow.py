@@ -262,10 +262,19 @@ def test_whole_chain_runs_and_reruns_only_what_changed(tmp_path):
     cfg["rig"]["box"]["loading"]["cycles"] = 2
     (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
     _snakemake(d)
-    for out in ("results/study.nc", "results/study/iri/iri.csv", "results/study/report/report.md"):
+    for out in ("results/study.nc", "results/study/iri/iri.csv", "results/study/iri/iri_thesis.csv",
+                "results/study/report/report.md"):
         assert (d / out).is_file(), out
     assert not _unrecorded(d / "results")
     assert "Nothing to be done" in _snakemake(d, "-n")
+    # the run's reference record from its outputs and records (docs/thesis-scale/'s command)
+    rec = subprocess.run(["ballaststudy", "study", "record", "results", "--out", "record"], cwd=d,
+                         capture_output=True, text=True)
+    assert rec.returncode == 0, rec.stderr
+    md = (d / "record" / "README.md").read_text()
+    for step in ("forms generate", "bpm build", "case assemble", "case run", "study aggregate"):
+        assert f"| {step} | 1 |" in md, step
+    assert "0 present; **missing: G_1-1" in md and "logical CPUs" in md and "| box_test | " in md
     with _edited(d / "config" / "config.yaml", lambda c: _loading(c).update(cyclic_max_kN=40.0)):
         jobs = _jobs(_snakemake(d, "-n"))
     assert "case_assemble" not in jobs and jobs.get("case_run") == 1, jobs

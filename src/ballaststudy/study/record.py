@@ -7,6 +7,7 @@ it; writes README.md, per_database.csv, stages.csv, the thesis comparisons as CS
 figures as small PNGs."""
 
 import datetime as dt
+import json
 import shutil
 from pathlib import Path
 
@@ -64,13 +65,21 @@ def _seconds(record):
     return (t1 - t0).total_seconds()
 
 
+def _jobs(records):
+    """One record per job: a step writes the same record beside each of its outputs."""
+    jobs = {}
+    for rec in records.values():
+        if "started" in rec:
+            key = (rec["step"], rec["started"], rec["finished"], json.dumps(rec.get("inputs"), sort_keys=True))
+            jobs[key] = rec
+    return list(jobs.values())
+
+
 def stage_table(records):
     """Per step of the provenance records: jobs, core seconds (sum of each job's start to
     finish), first start, last finish and the wall span between them."""
     rows = {}
-    for rec in {id(r): r for r in records.values()}.values():
-        if "started" not in rec:
-            continue
+    for rec in _jobs(records):
         row = rows.setdefault(rec["step"], {"step": rec["step"], "jobs": 0, "core_s": 0.0,
                                             "first_start": rec["started"], "last_finish": rec["finished"]})
         row["jobs"] += 1
@@ -96,8 +105,8 @@ def per_database(study):
 
 def _distinct(records, get):
     """The distinct values (as text) of ``get(record)`` over the records, None left out."""
-    values = {get(rec) for rec in {id(r): r for r in records.values()}.values()} - {None}
-    return sorted(v if isinstance(v, str) else repr(v) for v in values)
+    values = (get(rec) for rec in {id(r): r for r in records.values()}.values())
+    return sorted({v if isinstance(v, str) else json.dumps(v, sort_keys=True) for v in values if v is not None})
 
 
 def _run_lines(records, logs, study):
@@ -129,10 +138,10 @@ def _stage_lines(stages):
              "Per step: jobs, core hours (each job from its record's start to its finish: a case resumed "
              "from a checkpoint counts from its resume; the package import, ~2 s a job, is outside), and the "
              "wall span from the first start to the last finish.", "",
-             "| step | jobs | core h | span h | first start | last finish |", "|---|---|---|---|---|---|"]
-    lines += [f"| {r.step} | {r.jobs} | {r.core_s / 3600:.2f} | {r.span_s / 3600:.2f} | {r.first_start} | "
+             "| step | jobs | core min | span min | first start | last finish |", "|---|---|---|---|---|---|"]
+    lines += [f"| {r.step} | {r.jobs} | {r.core_s / 60:.1f} | {r.span_s / 60:.1f} | {r.first_start} | "
               f"{r.last_finish} |" for r in stages.itertuples()]
-    return lines + [f"| all | {int(stages.jobs.sum())} | {stages.core_s.sum() / 3600:.2f} | | | |", ""]
+    return lines + [f"| all | {int(stages.jobs.sum())} | {stages.core_s.sum() / 60:.1f} | | | |", ""]
 
 
 def _database_lines(table):
@@ -178,14 +187,14 @@ def _optimum_lines(ranking):
 def _model_lines(records, study):
     """Numbers that bear on where we differ from the thesis: resolution, material, breakage."""
     bpm = [r["params"].get("bpm", {}) for r in records.values() if r["step"] == "bpm build"]
-    radii = sorted({(b.get("radius_min_mm"), b.get("radius_max_mm")) for b in bpm})
+    radii = sorted({(b["radius_min"] * 1e3, b["radius_max"] * 1e3) for b in bpm if "radius_min" in b})
     material = _distinct({k: r for k, r in records.items() if r["step"] == "case run"},
-                         lambda r: r["params"].get("material_parameters"))
+                         lambda r: r["params"].get("material_parameters") or "Table 4.2's")
     final_br = stats.final_value(study["breakage_rate"].values)
     ran = np.isfinite(final_br)
     broke = int((final_br[ran] > 0).sum())
     lines = ["## What bears on the differences", "",
-             f"- Ball radii of the bonded stones (bpm): {', '.join(f'{a}-{b} mm' for a, b in radii) or 'not recorded'}"
+             f"- Ball radii of the bonded stones (bpm): {', '.join(f'{a:g}-{b:g} mm' for a, b in radii) or 'not recorded'}"
              " (the thesis does not give its PFC value).",
              f"- Material parameters of the cases: {'; '.join(material) or 'not recorded'}.",
              f"- Breakage: {broke} of {int(ran.sum())} cases broke at least one bond; final breakage rate at most "
