@@ -135,7 +135,7 @@ def _run_lines(records, logs, study):
 
 def _stage_lines(stages):
     lines = ["## Where the time went (provenance records)", "",
-             "Per step: jobs, core hours (each job from its record's start to its finish: a case resumed "
+             "Per step: jobs, core minutes (each job from its record's start to its finish: a case resumed "
              "from a checkpoint counts from its resume; the package import, ~2 s a job, is outside), and the "
              "wall span from the first start to the last finish.", "",
              "| step | jobs | core min | span min | first start | last finish |", "|---|---|---|---|---|---|"]
