@@ -113,9 +113,9 @@ def scale_note(study):
             "samples only; they are not a check of thesis Table 5-2.")
 
 
-def thesis_markdown(thesis):
-    """The section setting our verdicts beside thesis 5.7's relations."""
-    lines = ["## Beside thesis Table 5-2", "",
+def thesis_markdown(thesis, title="## Beside thesis Table 5-2"):
+    """The section setting our verdicts beside thesis 5.7's relations (iri.md, the record)."""
+    lines = [title, "",
              "The thesis' relation per pair from its text (5.7), our Spearman's rho of the per-case quantities "
              "its sentence names (final: at the last run cycle; variability: sd over the run cycles), our "
              f"verdict and the mark. Mark rule: {THESIS_RULE}.", "",

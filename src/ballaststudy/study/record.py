@@ -21,7 +21,7 @@ from ..provenance.store import load_records
 from ..schema import ConfigError
 from . import optimise, plots, scale, stats
 from .aggregate import BEHAVIOURS
-from .iri import THESIS_CSV, THESIS_RULE
+from .iri import THESIS_CSV, thesis_markdown
 from .report import extent_line, scale_banner
 
 # behaviour, column label, factor to the unit shown
@@ -105,7 +105,7 @@ def per_database(study):
 
 def _distinct(records, get):
     """The distinct values (as text) of ``get(record)`` over the records, None left out."""
-    values = (get(rec) for rec in {id(r): r for r in records.values()}.values())
+    values = (get(rec) for rec in records.values())
     return sorted({v if isinstance(v, str) else json.dumps(v, sort_keys=True) for v in values if v is not None})
 
 
@@ -155,17 +155,6 @@ def _database_lines(table):
     return lines + [""]
 
 
-def _iri_lines(thesis):
-    lines = ["## IRI beside thesis Table 5-2", "", f"Mark rule: {THESIS_RULE}.", "",
-             "| IRI | thesis (5.7) | quantities | n | Spearman rho [95 % CI] | ours | mark |",
-             "|---|---|---|---|---|---|---|"]
-    for r in thesis.itertuples():
-        lines.append(f"| {r.iri} | {r.thesis}: {r.thesis_words} | {r.quantity_a} / {r.quantity_b} | {r.n} | "
-                     f"{r.spearman_rho:.2f} [{r.spearman_lo:.2f}, {r.spearman_hi:.2f}] | {r.verdict} | "
-                     f"**{r.mark}** |")
-    return lines + [""]
-
-
 def _finding_lines(findings):
     lines = ["## The thesis' chapter-5 findings", "", "| finding | thesis' claim | our mark | numbers |",
              "|---|---|---|---|"]
@@ -194,7 +183,8 @@ def _model_lines(records, study):
     ran = np.isfinite(final_br)
     broke = int((final_br[ran] > 0).sum())
     lines = ["## What bears on the differences", "",
-             f"- Ball radii of the bonded stones (bpm): {', '.join(f'{a:g}-{b:g} mm' for a, b in radii) or 'not recorded'}"
+             f"- Ball radii of the bonded stones (bpm): "
+             f"{', '.join(f'{a:g}-{b:g} mm' for a, b in radii) or 'not recorded'}"
              " (the thesis does not give its PFC value).",
              f"- Material parameters of the cases: {'; '.join(material) or 'not recorded'}.",
              f"- Breakage: {broke} of {int(ran.sum())} cases broke at least one bond; final breakage rate at most "
@@ -249,8 +239,8 @@ def write_record(results_dir, out_dir, time_logs=(), command=None):
              f"Written by `{command or 'ballaststudy study record'}` from the run's outputs in `{results}`; "
              "regenerate it, do not edit it.", ""]
     lines += _banner(study) + _run_lines(records, logs, study) + _stage_lines(stages) + _database_lines(table)
-    lines += _iri_lines(iri_thesis) + _finding_lines(findings) + _optimum_lines(ranking)
-    lines += _model_lines(records, study)
+    lines += thesis_markdown(iri_thesis, "## IRI beside thesis Table 5-2") + _finding_lines(findings)
+    lines += _optimum_lines(ranking) + _model_lines(records, study)
     lines += ["## Figures (Figs. 5-1 to 5-6 and the fines threshold)", "",
               f"Curves: mean over cases; bands: {plots.BAND}.", ""]
     lines += [f"![{p.stem}]({p.name})" for p in written if p.suffix == ".png"] + [""]
