@@ -13,7 +13,7 @@ from matplotlib import image
 
 from ballaststudy.config import ConfigError
 from ballaststudy.study.cli import register
-from ballaststudy.study.record import read_time_log, stage_table
+from ballaststudy.study.timing import database_times, read_time_log, stage_table
 
 TIME_LOG = """\
 \tCommand being timed: "snakemake --cores 2 --configfile config/thesis.yaml"
@@ -78,6 +78,11 @@ def test_time_log_and_stages(run, tmp_path):
     assert case.jobs == 2 and case.core_s == 300 and case.span_s == 260   # 00:00:00 to 00:04:20
     assert stages.loc["bpm build", "core_s"] == 30
     assert stages.index[0] == "bpm build"       # ordered by first start
+    times = database_times(load_records(res))   # per database from the output paths
+    assert list(times.index) == ["a", "b"]
+    assert times.loc["a", "bpm_build_median_s"] == 30 and times.loc["a", "case_run_median_s"] == 100
+    assert times.loc["b", "case_run_jobs"] == 1 and times.loc["b", "case_run_median_s"] == 200
+    assert times.loc["a", "core_h"] == 130 / 3600 and np.isnan(times.loc["b", "bpm_build_median_s"])
 
 
 def test_record_numbers_and_files(run, thesis_study, tmp_path):
@@ -98,6 +103,7 @@ def test_record_numbers_and_files(run, thesis_study, tmp_path):
     # the run: its command, wall and CPU hours from the log; stages from the records
     assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h, CPU 2.00 h" in md
     assert "| case run | 2 | 5.0 | 4.3 |" in md and "abc123" in md
+    assert "| a | - | 30 | - (0) | 1.7 (1) | 0.04 |" in md and "| b | - | - | - (0) | 3.3 (1) | 0.06 |" in md
     assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5 mm" in md
     assert "Material parameters of the cases: {\"E_Pa\": 1000000000.0, \"mu\": 0.7}." in md
     assert "The thesis' 15 databases: 15 present\n" in md

@@ -3,10 +3,9 @@ against the thesis' chapter 5, written by the program from the run, never by han
 
 Reads the results folder (study.nc, the IRI and optimisation outputs, every provenance
 record) and optionally the ``/usr/bin/time -v`` logs of the snakemake commands that made
-it; writes README.md, per_database.csv, stages.csv, the thesis comparisons as CSV and the
+it; writes README.md, per_database.csv, stages.csv, database_times.csv, the thesis comparisons as CSV and the
 figures as small PNGs."""
 
-import datetime as dt
 import json
 import shutil
 from pathlib import Path
@@ -18,11 +17,11 @@ from PIL import Image
 from ..atomic import atomic_path
 from ..inputs import input_dir, input_file, open_netcdf
 from ..provenance.store import load_records
-from ..schema import ConfigError
 from . import optimise, plots, scale, stats
 from .aggregate import BEHAVIOURS
 from .iri import THESIS_CSV, thesis_markdown
 from .report import extent_line, scale_banner
+from .timing import database_times, read_time_log, stage_table
 
 # behaviour, column label, factor to the unit shown
 SHOWN = [("settlement", "final settlement (mm)", 1e3), ("breakage_rate", "breakage rate (%)", 100.0),
@@ -30,66 +29,10 @@ SHOWN = [("settlement", "final settlement (mm)", 1e3), ("breakage_rate", "breaka
          ("void_ratio", "void ratio (-)", 1.0)]
 THUMBNAIL_SCALE = 0.45
 BREAKAGE_CYCLES = (1, 10, 100)   # cycles at which the record says how much breakage had happened
-# /usr/bin/time -v's lines we keep: label in the log -> our key
-TIME_LINES = {"Command being timed": "command", "Elapsed (wall clock) time (h:mm:ss or m:ss)": "wall",
-              "User time (seconds)": "user_s", "System time (seconds)": "system_s",
-              "Maximum resident set size (kbytes)": "max_rss_kB", "Exit status": "exit_status"}
 
 
 def _need(path, what):
     return input_file(path, f"expected {what} (run the study first: snakemake ... all)")
-
-
-def _wall_seconds(text):
-    """h:mm:ss or m:ss(.ss) -> seconds."""
-    parts = [float(p) for p in text.split(":")]
-    return sum(p * 60 ** k for k, p in enumerate(reversed(parts)))
-
-
-def read_time_log(path):
-    """The run's command, wall, CPU seconds, peak memory and exit status from a
-    ``/usr/bin/time -v`` log (ConfigError naming the file if it holds none)."""
-    found = {}
-    for line in _need(path, "a /usr/bin/time -v log").read_text(errors="replace").splitlines():
-        label, sep, value = line.strip().rpartition(": ")
-        if sep and label in TIME_LINES:
-            found[TIME_LINES[label]] = value.strip().strip('"')
-    if "wall" not in found:
-        raise ConfigError(path, None, "no 'Elapsed (wall clock) time' line: not a /usr/bin/time -v log")
-    found["wall_s"] = _wall_seconds(found.pop("wall"))
-    found["log"] = str(path)
-    return found
-
-
-def _seconds(record):
-    t0, t1 = (dt.datetime.fromisoformat(record[k]) for k in ("started", "finished"))
-    return (t1 - t0).total_seconds()
-
-
-def _jobs(records):
-    """One record per job: a step writes the same record beside each of its outputs."""
-    jobs = {}
-    for rec in records.values():
-        if "started" in rec:
-            key = (rec["step"], rec["started"], rec["finished"], json.dumps(rec.get("inputs"), sort_keys=True))
-            jobs[key] = rec
-    return list(jobs.values())
-
-
-def stage_table(records):
-    """Per step of the provenance records: jobs, core seconds (sum of each job's start to
-    finish), first start, last finish and the wall span between them."""
-    rows = {}
-    for rec in _jobs(records):
-        row = rows.setdefault(rec["step"], {"step": rec["step"], "jobs": 0, "core_s": 0.0,
-                                            "first_start": rec["started"], "last_finish": rec["finished"]})
-        row["jobs"] += 1
-        row["core_s"] += _seconds(rec)
-        row["first_start"] = min(row["first_start"], rec["started"])
-        row["last_finish"] = max(row["last_finish"], rec["finished"])
-    df = pd.DataFrame(list(rows.values()), columns=["step", "jobs", "core_s", "first_start", "last_finish"])
-    df["span_s"] = [_seconds({"started": a, "finished": b}) for a, b in zip(df.first_start, df.last_finish)]
-    return df.sort_values("first_start").reset_index(drop=True)
 
 
 def per_database(study):
@@ -143,6 +86,25 @@ def _stage_lines(stages):
     lines += [f"| {r.step} | {r.jobs} | {r.core_s / 60:.1f} | {r.span_s / 60:.1f} | {r.first_start} | "
               f"{r.last_finish} |" for r in stages.itertuples()]
     return lines + [f"| all | {int(stages.jobs.sum())} | {stages.core_s.sum() / 60:.1f} | | | |", ""]
+
+
+def _whole(seconds):
+    """Seconds as the records resolve them (whole seconds): < 1 rather than 0; - for no job."""
+    return "-" if np.isnan(seconds) else "< 1" if seconds < 1 else f"{seconds:.0f}"
+
+
+def _time_lines(times):
+    if times.empty:
+        return []
+    lines = ["Per database (median per case, since a case resumed from a checkpoint counts from its resume; "
+             "jobs in brackets):", "",
+             "| database | forms s | bpm s | assembly s per case | loading min per case | core h |",
+             "|---|---|---|---|---|---|"]
+    for db, r in times.iterrows():
+        lines.append(f"| {db} | {_whole(r.forms_generate_median_s)} | {_whole(r.bpm_build_median_s)} | "
+                     f"{_whole(r.case_assemble_median_s)} ({int(r.case_assemble_jobs)}) | "
+                     f"{r.case_run_median_s / 60:.1f} ({int(r.case_run_jobs)}) | {r.core_h:.2f} |".replace("nan", "-"))
+    return lines + [""]
 
 
 def _database_lines(table):
@@ -268,19 +230,21 @@ def write_record(results_dir, out_dir, time_logs=(), command=None):
     records = load_records(results)
     logs = [read_time_log(p) for p in time_logs]
     figures = [_need(report_dir / name, "a figure of the optimisation report") for name in plots.figure_names()]
-    table, stages = per_database(study), stage_table(records)      # everything read: now write
-    out.mkdir(parents=True, exist_ok=True)
+    table, stages, times = per_database(study), stage_table(records), database_times(records)
+    out.mkdir(parents=True, exist_ok=True)                           # everything read: now write
     written = _thumbnails(figures, out)
-    for name, frame in (("per_database.csv", table), ("stages.csv", stages)):
+    for name, frame, index in (("per_database.csv", table, True), ("stages.csv", stages, False),
+                               ("database_times.csv", times, True)):
         with atomic_path(out / name) as tmp:
-            frame.to_csv(tmp, index=name == "per_database.csv")
+            frame.to_csv(tmp, index=index)
         written.append(out / name)
     written += [_copy(results / "study" / "iri" / THESIS_CSV, out / THESIS_CSV),
                 _copy(report_dir / "findings.csv", out / "findings.csv")]
     lines = ["# The thesis-scale study beside Wang 2018, chapter 5", "",
              f"Written by `{command or 'ballaststudy study record'}` from the run's outputs in `{results}`; "
              "regenerate it, do not edit it.", ""]
-    lines += _banner(study) + _run_lines(records, logs, study) + _stage_lines(stages) + _database_lines(table)
+    lines += _banner(study) + _run_lines(records, logs, study) + _stage_lines(stages) + _time_lines(times)
+    lines += _database_lines(table)
     lines += thesis_markdown(iri_thesis, "## IRI beside thesis Table 5-2") + _finding_lines(findings)
     lines += _optimum_lines(ranking) + _model_lines(records, study)
     lines += ["## Figures (Figs. 5-1 to 5-6 and the fines threshold)", "",
