@@ -3,8 +3,8 @@ against the thesis' chapter 5, written by the program from the run, never by han
 
 Reads the results folder (study.nc, the IRI and optimisation outputs, every provenance
 record) and optionally the ``/usr/bin/time -v`` logs of the snakemake commands that made
-it; writes README.md, per_database.csv, stages.csv, database_times.csv, the thesis comparisons as CSV and the
-figures as small PNGs."""
+it; writes README.md, per_database.csv, stages.csv, database_times.csv, the thesis
+comparisons as CSV and the figures as small PNGs."""
 
 import json
 import shutil
