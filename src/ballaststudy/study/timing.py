@@ -27,7 +27,8 @@ def read_time_log(path):
     """The run's command, wall, CPU seconds, peak memory and exit status from a
     ``/usr/bin/time -v`` log (ConfigError naming the file if it holds none)."""
     found = {}
-    for line in input_file(path, "expected a /usr/bin/time -v log of the snakemake command").read_text(errors="replace").splitlines():
+    text = input_file(path, "expected a /usr/bin/time -v log of the snakemake command").read_text(errors="replace")
+    for line in text.splitlines():
         label, sep, value = line.strip().rpartition(": ")
         if sep and label in TIME_LINES:
             found[TIME_LINES[label]] = value.strip().strip('"')
