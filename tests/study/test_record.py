@@ -13,7 +13,7 @@ from matplotlib import image
 
 from ballaststudy.config import ConfigError
 from ballaststudy.study.cli import register
-from ballaststudy.study.timing import database_times, read_time_log, stage_table
+from ballaststudy.study.timing import database_times, of_databases, read_time_log, stage_table
 
 TIME_LOG = """\
 \tCommand being timed: "snakemake --cores 2 --configfile config/thesis.yaml"
@@ -47,13 +47,14 @@ def run(thesis_study, tmp_path_factory):
         args = p.parse_args(["study", action, str(res / "study.nc"), "--out", str(res / out), "--resamples", "200"])
         args.func(args)
     material = {"material_parameters": {"E_Pa": 1e9, "mu": 0.7}}
-    planted = [("cases/a/metrics.nc", _record("case run", "2026-01-01T00:00:00+00:00", "2026-01-01T00:01:40+00:00",
-                                              material)),
-               ("cases/b/metrics.nc", _record("case run", "2026-01-01T00:01:00+00:00", "2026-01-01T00:04:20+00:00",
-                                              material)),
-               ("bpm/a.nc", _record("bpm build", "2025-12-31T23:00:00+00:00", "2025-12-31T23:00:30+00:00",
-                                    {"bpm": {"radius_min": 2.5e-3, "radius_max": 5e-3}}))]
-    planted.append(("cases/a/case.png", planted[0][1]))   # one job's record beside each of its outputs
+    a, b = "cases/G_1-1/case0", "cases/G_2-1/case0"       # the folders the workflow gives two cases
+    planted = [(f"{a}/metrics.nc", _record("case run", "2026-01-01T00:00:00+00:00", "2026-01-01T00:01:40+00:00",
+                                           material)),
+               (f"{b}/metrics.nc", _record("case run", "2026-01-01T00:01:00+00:00", "2026-01-01T00:04:20+00:00",
+                                           material)),
+               ("bpm/G_1-1.nc", _record("bpm build", "2025-12-31T23:00:00+00:00", "2025-12-31T23:00:30+00:00",
+                                        {"bpm": {"radius_min": 2.5e-3, "radius_max": 5e-3}}))]
+    planted.append((f"{a}/case.png", planted[0][1]))   # one job's record beside each of its outputs
     for rel, rec in planted:
         side = res / (rel + ".prov.json")
         side.parent.mkdir(parents=True, exist_ok=True)
@@ -79,10 +80,15 @@ def test_time_log_and_stages(run, tmp_path):
     assert stages.loc["bpm build", "core_s"] == 30
     assert stages.index[0] == "bpm build"       # ordered by first start
     times = database_times(load_records(res))   # per database from the output paths
-    assert list(times.index) == ["a", "b"]
-    assert times.loc["a", "bpm_build_median_s"] == 30 and times.loc["a", "case_run_median_s"] == 100
-    assert times.loc["b", "case_run_jobs"] == 1 and times.loc["b", "case_run_median_s"] == 200
-    assert times.loc["a", "core_h"] == 130 / 3600 and np.isnan(times.loc["b", "bpm_build_median_s"])
+    assert list(times.index) == ["G_1-1", "G_2-1"]
+    assert times.loc["G_1-1", "bpm_build_median_s"] == 30 and times.loc["G_1-1", "case_run_median_s"] == 100
+    assert times.loc["G_2-1", "case_run_jobs"] == 1 and times.loc["G_2-1", "case_run_median_s"] == 200
+    assert times.loc["G_1-1", "core_h"] == 130 / 3600 and np.isnan(times.loc["G_2-1", "bpm_build_median_s"])
+    # a part run's folder may hold jobs of databases the study does not hold yet: left out
+    kept = of_databases(load_records(res), ["G_1-1"])
+    assert sum(r["step"] == "case run" for r in kept.values()) == 2          # beside its two outputs
+    assert {r["step"] for r in kept.values()} == {"case run", "bpm build", "study iri", "study optimise"}
+    assert list(database_times(kept).index) == ["G_1-1"]
 
 
 def test_record_numbers_and_files(run, thesis_study, tmp_path):
@@ -103,10 +109,11 @@ def test_record_numbers_and_files(run, thesis_study, tmp_path):
     # the run: its command, wall and CPU hours from the log; stages from the records
     assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h, CPU 2.00 h" in md
     assert "| case run | 2 | 5.0 | 4.3 |" in md and "abc123" in md
-    assert "| a | - | 30 | - (0) | 1.7 (1) | 0.04 |" in md and "| b | - | - | - (0) | 3.3 (1) | 0.06 |" in md
+    assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 |" in md and "| G_2-1 | - | - | - (0) | 3.3 (1) | 0.06 |" in md
     assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5 mm" in md
     assert "Material parameters of the cases: {\"E_Pa\": 1000000000.0, \"mu\": 0.7}." in md
     assert "The thesis' 15 databases: 15 present\n" in md
+    assert "- Extent: 15 databases, 4 cases each, up to 12 cycles (cases ran 12 cycles)." in md
     # comparisons beside the thesis, copied from the run's own outputs
     assert pd.read_csv(out / "iri_thesis.csv").equals(pd.read_csv(res / "study/iri/iri_thesis.csv"))
     assert pd.read_csv(out / "findings.csv").equals(pd.read_csv(res / "study/report/findings.csv"))

@@ -21,7 +21,7 @@ from . import optimise, plots, scale, stats
 from .aggregate import BEHAVIOURS
 from .iri import THESIS_CSV, thesis_markdown
 from .report import extent_line, scale_banner
-from .timing import database_times, read_time_log, stage_table
+from .timing import database_times, of_databases, read_time_log, stage_table
 
 # behaviour, column label, factor to the unit shown
 SHOWN = [("settlement", "final settlement (mm)", 1e3), ("breakage_rate", "breakage rate (%)", 100.0),
@@ -227,7 +227,7 @@ def write_record(results_dir, out_dir, time_logs=(), command=None):
     report_dir = results / "study" / "report"
     findings = pd.read_csv(_need(report_dir / "findings.csv", "the optimisation report's findings"))
     ranking = pd.read_csv(_need(report_dir / "ranking.csv", "the optimisation report's ranking"), index_col=0)
-    records = load_records(results)
+    records = of_databases(load_records(results), [str(d) for d in study.database.values])
     logs = [read_time_log(p) for p in time_logs]
     figures = [_need(report_dir / name, "a figure of the optimisation report") for name in plots.figure_names()]
     table, stages, times = per_database(study), stage_table(records), database_times(records)

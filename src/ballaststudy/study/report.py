@@ -106,14 +106,18 @@ def report_markdown(ctx, findings, pareto, recommend, figures, study_path=None, 
     return "\n".join(lines)
 
 
+def _span(lo, hi):
+    return f"{int(lo)}" if lo == hi else f"{int(lo)}-{int(hi)}"
+
+
 def extent_line(study):
     """One sentence: databases, cases, cycles run, and assemblies stopped at a step limit."""
     run = scale.cycles_run(study)
     cases = (run > 0).sum(axis=1)
-    text = (f"{study.sizes['database']} databases, {int(cases.min())}-{int(cases.max())} cases each, "
+    text = (f"{study.sizes['database']} databases, {_span(cases.min(), cases.max())} cases each, "
             f"up to {study.sizes['cycle']} cycles")
     if (run > 0).any():
-        text += f" (cases ran {int(run[run > 0].min())}-{int(run.max())} cycles)"
+        text += f" (cases ran {_span(run[run > 0].min(), run.max())} cycles)"
     text += "."
     if "assembly_stages_at_limit" in study:
         limits = study["assembly_stages_at_limit"].values

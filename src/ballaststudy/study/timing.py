@@ -76,7 +76,7 @@ DATABASE_STEPS = {"forms generate": "forms", "bpm build": "bpm"}
 CASE_STEPS = ("case assemble", "case run")
 
 
-def _database_of(rec):
+def database_of(rec):
     """The database a job worked for, from its first output's path (None for study steps)."""
     path = Path(sorted(rec.get("output", {}))[0]) if rec.get("output") else None
     if path is None:
@@ -89,13 +89,19 @@ def _database_of(rec):
     return None
 
 
+def of_databases(records, names):
+    """The records of the study steps and of the jobs that worked for the named databases
+    (a results folder may hold jobs of databases that a part run has not reached yet)."""
+    return {path: rec for path, rec in records.items() if database_of(rec) in (None, *names)}
+
+
 def database_times(records):
     """Per database: seconds of its form database and BPM library, and per case the median
     seconds of assembly and of the loading run (cases resumed from a checkpoint count from
     their resume, so the median), with the number of jobs and the core hours in all."""
     seconds = {}
     for rec in _jobs(records):
-        db = _database_of(rec)
+        db = database_of(rec)
         if db is not None:
             seconds.setdefault(db, {}).setdefault(rec["step"], []).append(_seconds(rec))
     rows = []
