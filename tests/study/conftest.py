@@ -11,7 +11,9 @@ from ballaststudy.standards import GRADING_SIEVES_MM
 
 UNITS = {"settlement": "m", "breakage_rate_tension": "1", "breakage_rate_shear": "1", "breakage_rate": "1",
          "fpa_left": "degree", "fpa_right": "degree", "fpa": "degree", "void_ratio": "1",
-         "ghost_particles": "1", "mean_coordination": "1"}
+         "ghost_particles": "1", "mean_coordination": "1", "broken_tension": "1", "broken_shear": "1",
+         "breakages_per_cycle": "1"}
+PLANTED_ELEMENTS = 2000   # flat-joint elements per planted case: its broken counts are its rate x this
 
 # Table 3-2 gradings (percent passing at 80 ... 8 mm) and Table 3-1 shape indexes
 THESIS = {
@@ -100,9 +102,12 @@ def planted_datasets(rng, databases=THESIS, n_cases=4, n_cycles=12, settlement_o
             fpa_sd = 3.0 if x > 16 else 0.2
             fpa = 55 + rng.normal(0, fpa_sd, n_cycles)
             br = np.abs(rng.normal(0.002, 0.0005)) * t
+            broken = np.round(br * PLANTED_ELEMENTS)
             series = {"settlement": settlement, "ghost_particles": ghost, "void_ratio": vr, "fpa": fpa,
                       "fpa_left": fpa, "fpa_right": fpa, "breakage_rate": br, "breakage_rate_tension": br / 2,
-                      "breakage_rate_shear": br / 2, "mean_coordination": np.full(n_cycles, 3.5)}
+                      "breakage_rate_shear": br / 2, "mean_coordination": np.full(n_cycles, 3.5),
+                      "broken_tension": np.floor(broken / 2), "broken_shear": broken - np.floor(broken / 2),
+                      "breakages_per_cycle": np.diff(broken, prepend=0.0)}
             metrics[(name, case)] = metrics_dataset(series)
     return metrics, forms
 

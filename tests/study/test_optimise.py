@@ -154,7 +154,7 @@ def test_report_and_cli(thesis_study, tmp_path, capsys):
     args.func(args)
     out = tmp_path / "opt"
     md = (out / "report.md").read_text()
-    for name in ("fig_5-1_settlement.png", "fig_5-2_breakage_rate.png", "fig_5-3_final_breakage_rate.png",
+    for name in ("fig_5-1_settlement.png", "fig_5-2_breakage_rate.png", "fig_5-3_breakages.png",
                  "fig_5-4_ghost_particles.png", "fig_5-5_force_propagation_angle.png", "fig_5-6_void_ratio.png",
                  "fig_fines_threshold.png"):
         assert (out / name).stat().st_size > 1000 and f"]({name})" in md

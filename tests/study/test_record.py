@@ -13,6 +13,8 @@ from matplotlib import image
 
 from ballaststudy.config import ConfigError
 from ballaststudy.study.cli import register
+from ballaststudy.study.breakage import breakage_counts, breakage_timing
+from ballaststudy.study.record import _breakage_lines
 from ballaststudy.study.timing import database_times, of_databases, read_time_log, stage_table
 
 TIME_LOG = """\
@@ -156,24 +158,29 @@ def test_record_of_a_part_names_the_missing_databases(run, thesis_study, tmp_pat
     assert len(pd.read_csv(tmp_path / "out" / "per_database.csv")) == 13
 
 
-def test_breakage_timing_on_planted_counts():
-    """Four cases with planted cumulative broken counts and bond totals: one breaks half its
-    final count before cycle 1 ends, one only later, one never, one stops after 3 cycles."""
-    from ballaststudy.study.record import _breakage_lines, breakage_timing
+def test_breakage_timing_and_counts_on_planted_counts():
+    """Four cases with planted cumulative broken counts and bond totals: one breaks 3 elements in
+    the static pre-loading and half its final count before cycle 1 ends, one only later, one
+    never, one stops after 3 cycles."""
     nan = np.nan
     broken = np.array([[[5, 5, 6, 8, 10], [0, 2, 4, 4, 4]], [[0, 0, 0, 0, 0], [3, 3, 6, nan, nan]]])
+    per_cycle = np.array([[[2, 0, 1, 2, 2], [0, 2, 2, 0, 0]], [[0, 0, 0, 0, 0], [1, 0, 3, nan, nan]]])
     bonds = np.array([[1000, 2000], [1200, 1500]])[..., None]
     tension = np.floor(broken / 2)
-    study = xr.Dataset({"breakage_rate": (("database", "case", "cycle"), broken / bonds),
-                        "broken_tension": (("database", "case", "cycle"), tension),
-                        "broken_shear": (("database", "case", "cycle"), broken - tension)})
+    dims = ("database", "case", "cycle")
+    study = xr.Dataset({"breakage_rate": (dims, broken / bonds), "broken_tension": (dims, tension),
+                        "broken_shear": (dims, broken - tension), "breakages_per_cycle": (dims, per_cycle)})
     t = breakage_timing(study, cycles=(1, 3, 5, 10))
     assert (t["cases_broke"], t["cases_ran"]) == (3, 4)
     # by hand: cycle 1: 5/10, 0/4, 3/6; cycle 3: 6/10, 4/4, 6/6; cycle 5: 1, 1 (the short case left out)
     assert t["share"] == {1: 0.5, 3: 1.0, 5: 1.0}
     assert list(t["elements"]) == [1000, 2000, 1500] and list(t["broken"]) == [10, 4, 6]
+    total, during = breakage_counts(study)
+    assert np.array_equal(total, [[10, 4], [0, 6]]) and np.array_equal(during, [[7, 4], [0, 4]])
     text = "\n".join(_breakage_lines(study))
     assert "1,000-2,000 flat-joint elements per case" in text and "0.05-0.1 % of the breakage rate" in text
     assert "fewer than 10-20 broken elements" in text and "ours broke 6 (median; 4-10)" in text
+    # per database means: totals (10 + 4) / 2 = 7 and (0 + 6) / 2 = 3; during (7 + 4) / 2, (0 + 4) / 2
+    assert "mean per database (Fig. 5-3): 3-7, of them during the load cycles 2-5.5 " in text
     # without the counts (an older study.nc) only the timing is said
     assert "elements" not in breakage_timing(study.drop_vars(["broken_tension", "broken_shear"]))

@@ -29,7 +29,8 @@ from ..standards import GRADING_SIEVES_MM
 # the behaviours of study.nc: units and long names are metrics.nc's (one table per variable)
 BEHAVIOURS = {name: VARIABLES[name][:2] for name in (
     "settlement", "breakage_rate_tension", "breakage_rate_shear", "breakage_rate", "fpa_left",
-    "fpa_right", "fpa", "void_ratio", "ghost_particles", "mean_coordination")}
+    "fpa_right", "fpa", "void_ratio", "ghost_particles", "mean_coordination",
+    "broken_tension", "broken_shear", "breakages_per_cycle")}    # the counts: Fig. 5-3
 
 # accepted input units -> factor to the canonical unit
 _UNIT_FACTORS = {
