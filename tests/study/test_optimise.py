@@ -17,7 +17,9 @@ from ballaststudy.study.report import report_markdown, scale_banner
 MARKS = {"holds", "does not hold", "not decidable"}
 AT_SCALE = "not decidable at this scale"
 FINDINGS = ["jump_G_1-1", "jump_G_2-5", "fines_threshold", "gp_with_settlement", "vr_with_mean_size",
-            "vr_with_fines", "fpa_stability", "breakage_low_no_trend", "optimum"]
+            "vr_with_fines", "fpa_stability", "fpa_about_55", "breakage_low_no_trend",
+            "settlement_flat_G_1-2_to_G_1-5", "gp_falls_group_1", "gp_rises_group_2", "gp_rises_group_3",
+            "vr_shape_none", "optimum"]
 
 
 def _marks(study, **kw):
@@ -84,9 +86,12 @@ def test_thesis_findings_on_planted_data(thesis_study):
         assert f["mark_by_rule"] in MARKS and f["rule"] and f["numbers"]
         assert f["mark"] == (AT_SCALE if f["mark_by_rule"] in ("holds", "does not hold") else f["mark_by_rule"])
     marks = {f["finding"]: f["mark_by_rule"] for f in findings}
+    # planted: GP = 10 + 2 x settlement, settlement falling with the mean size in group 1 (its fines fall
+    # from G_1-1 to G_1-5) and rising with the fines in group 2; FPA 55 deg; group 3's grading is one
     for key in ("jump_G_1-1", "jump_G_2-5", "fines_threshold", "gp_with_settlement", "vr_with_fines",
-                "fpa_stability", "breakage_low_no_trend"):
+                "fpa_stability", "fpa_about_55", "breakage_low_no_trend", "gp_falls_group_1", "gp_rises_group_2"):
         assert marks[key] == "holds", (key, [f for f in findings if f["finding"] == key])
+    assert _marks(study.assign(fpa=study.fpa - 10.0))["fpa_about_55"] == "does not hold"   # 45 deg
 
 
 def test_findings_not_decidable_when_databases_absent(thesis_study):
@@ -179,3 +184,27 @@ def test_report_and_cli(thesis_study, tmp_path, capsys):
     args = p.parse_args(["study", "iri", str(path), "--out", str(tmp_path / "iri"), "--resamples", "200"])
     args.func(args)
     assert (tmp_path / "iri" / "iri.csv.prov.json").is_file()
+
+
+NOT_HOLDS = {"not decidable", "does not hold"}
+
+
+@pytest.mark.parametrize("slope, sign, marks", [
+    (1.0, +1, {"holds"}), (1.0, -1, {"does not hold"}), (1.0, 0, {"does not hold"}),
+    (-1.0, -1, {"holds"}), (0.0, 0, {"holds"}), (0.0, +1, NOT_HOLDS)])
+def test_group_pattern_rule_on_planted_trends(slope, sign, marks):
+    """Five databases of one group, 10 cases: a value rising (or falling) by `slope` per database
+    against case noise of sd 0.3, or flat; each expected direction gets the rule's mark (a flat
+    value against an expected rise: does not hold only where the interval excludes rho >= 0.3,
+    which 50 samples need not give)."""
+    from ballaststudy.study.optimise import _group_pattern
+    dbs = [f"G_2-{k}" for k in range(1, 6)]
+    rng = np.random.default_rng(3)
+    values = slope * np.arange(5)[:, None, None] + rng.normal(0, 0.3, (5, 10, 1))
+    study = xr.Dataset({"ghost_particles": (("database", "case", "cycle"), values)})
+    ctx = {"summary": pd.DataFrame({"group": ["2"] * 5}, index=dbs), "index": {d: i for i, d in enumerate(dbs)},
+           "n_boot": 500, "seed": 0}
+    f = _group_pattern(ctx, study, "k", "claim", "ghost_particles", "2", sign, None)
+    assert f["mark"] in marks, f["numbers"]
+    few = _group_pattern(ctx, study, "k", "claim", "ghost_particles", "2", sign, ("G_2-1", "G_2-2"))
+    assert few["mark"] == "not decidable" and "2 of group 2" in few["numbers"]

@@ -43,6 +43,23 @@ HIGH_FINES_PCT = 16.0   # thesis 5.2/5.8: at most 16 % passing 22.4 mm
 THRESHOLD_RANGE = (16.0, 17.5)
 BR_LIMIT = 0.01
 JUMP_FACTOR = 1.5
+THESIS_FPA_DEG = 55.0     # thesis 5.5: most angles "stay the same (about 55°)"
+FPA_TOLERANCE_DEG = 5.0   # our reading of "about": 55 +- 5 deg
+# thesis ch. 5's patterns within one database group: key, claim, variable, group, expected
+# direction along the group's order (+1 rising, -1 falling, 0 none), databases (None: all)
+GROUP_PATTERNS = [
+    ("settlement_flat_G_1-2_to_G_1-5", "settlements of G_1-2 to G_1-5 basically the same (5.2)", "settlement",
+     "1", 0, ("G_1-2", "G_1-3", "G_1-4", "G_1-5")),
+    ("gp_falls_group_1", "ghost particles fall with the mean size, G_1-1 to G_1-5 (5.4)", "ghost_particles", "1",
+     -1, None),
+    ("gp_rises_group_2", "ghost particles rise with the small stones' share, G_2-1 to G_2-5 (5.4)",
+     "ghost_particles", "2", +1, None),
+    ("gp_rises_group_3", "ghost particles rise with the share of flat stones, G_3-1 to G_3-5 (5.4)",
+     "ghost_particles", "3", +1, None),
+    ("vr_shape_none", "the shape distribution, G_3-1 to G_3-5, does not influence the void ratio greatly (5.6)",
+     "void_ratio", "3", 0, None),
+]
+DIRECTION_WORDS = {+1: "positive", -1: "negative", 0: "none"}
 
 
 def case_table(study):
@@ -313,10 +330,7 @@ def _breakage_finding(ctx, study):
     for g, members in s.groupby("group"):
         if len(members) < 3:
             continue
-        order = sorted(members.index, key=database_order_key)
-        x = np.concatenate([np.full(study.sizes["case"], k) for k, _ in enumerate(order)])
-        y = np.concatenate([final[ctx["index"][d]] for d in order])
-        c = stats.correlation(x, y, n_boot=ctx["n_boot"], seed=ctx["seed"])
+        c = _order_correlation(ctx, final, members.index)
         v = stats.verdict(c)
         if v != "not decidable":
             tested += 1
@@ -334,6 +348,66 @@ def _breakage_finding(ctx, study):
                     f"largest final BR {worst} {_fmt(100 * s.breakage_rate_final[worst])} % "
                     f"[{_fmt(100 * ci[worst][0])}, {_fmt(100 * ci[worst][1])}] %; level {level}; "
                     + ("; ".join(trends) if trends else "no group testable for a trend"))
+
+
+def _order_correlation(ctx, values, databases):
+    """Spearman's rho (with its bootstrap interval) of a per-case value (database, case)
+    against each database's place in its group's order, over every (database, case)."""
+    order = sorted(databases, key=database_order_key)
+    x = np.concatenate([np.full(values.shape[1], k) for k, _ in enumerate(order)])
+    y = np.concatenate([values[ctx["index"][d]] for d in order])
+    return stats.correlation(x, y, n_boot=ctx["n_boot"], seed=ctx["seed"])
+
+
+def _group_pattern(ctx, study, key, claim, variable, group, sign, databases):
+    word = DIRECTION_WORDS[sign]
+    rule = (f"Spearman's rho of the final {variable.replace('_', ' ')} of every (database, case) vs the "
+            f"database's place in group {group}'s order, 95 % bootstrap interval, verdict rule as in the IRI "
+            f"tables: holds if the verdict is {word}; does not hold if it is "
+            + ("positive or negative" if sign == 0 else
+               f"{'negative' if sign > 0 else 'positive'} or the interval excludes a {word} rho of at least "
+               f"{stats.MIN_ABS_RHO:g} in size")
+            + "; not decidable otherwise or with fewer than 3 of the group's databases")
+    s = ctx["summary"]
+    members = [d for d in (databases or s.index[s.group == group]) if d in s.index]
+    if len(members) < 3:
+        return _finding(key, claim, UNDECIDED, rule, f"{len(members)} of group {group}'s databases present")
+    c = _order_correlation(ctx, stats.final_value(study[variable].values), members)
+    v = stats.verdict(c)
+    if v == "not decidable":
+        mark = UNDECIDED
+    elif v == word:
+        mark = HOLDS
+    elif sign == 0 or v != "none" or (c["spearman_hi"] if sign > 0 else -c["spearman_lo"]) < stats.MIN_ABS_RHO:
+        mark = FAILS
+    else:
+        mark = UNDECIDED
+    return _finding(key, claim, mark, rule, f"{', '.join(sorted(members, key=database_order_key))}: n = {c['n']}, "
+                    f"rho = {_fmt(c['spearman_rho'])} [{_fmt(c['spearman_lo'])}, {_fmt(c['spearman_hi'])}], {v}")
+
+
+def _fpa_level_finding(ctx):
+    lo_d, hi_d = THESIS_FPA_DEG - FPA_TOLERANCE_DEG, THESIS_FPA_DEG + FPA_TOLERANCE_DEG
+    claim = (f"force propagation angle about {THESIS_FPA_DEG:g} deg along the cycles in the databases without "
+             f"high fines (5.5)")
+    rule = (f"level = FPA mean over the run cycles, mean over cases, 95 % bootstrap interval per database with at "
+            f"most {HIGH_FINES_PCT:g} % passing 22.4 mm: holds if every interval lies within [{lo_d:g}, {hi_d:g}] "
+            "deg (our reading of 'about'); does not hold if one lies wholly outside; not decidable otherwise or "
+            "with no such database")
+    s = ctx["summary"]
+    low = [d for d in s.index if s.percent_passing_22_4mm[d] <= HIGH_FINES_PCT and np.isfinite(s.fpa_level[d])]
+    if not low:
+        return _finding("fpa_about_55", claim, UNDECIDED, rule, "no database without high fines")
+    boot = ctx["boot"]("fpa_level")
+    ci = {d: stats.interval(boot[:, ctx["index"][d]]) for d in low}
+    inside = [lo >= lo_d and hi <= hi_d for lo, hi in ci.values()]
+    outside = [hi < lo_d or lo > hi_d for lo, hi in ci.values()]
+    mark = FAILS if any(outside) else HOLDS if all(inside) else UNDECIDED
+    lowest, highest = min(low, key=lambda d: s.fpa_level[d]), max(low, key=lambda d: s.fpa_level[d])
+    return _finding("fpa_about_55", claim, mark, rule,
+                    f"{len(low)} databases; lowest {lowest} {_fmt(s.fpa_level[lowest])} deg "
+                    f"[{_fmt(ci[lowest][0])}, {_fmt(ci[lowest][1])}], highest {highest} {_fmt(s.fpa_level[highest])} "
+                    f"deg [{_fmt(ci[highest][0])}, {_fmt(ci[highest][1])}]")
 
 
 THESIS_OPTIMUM = {"1": "G_1-5", "2": "G_2-1", "3": "G_3-1"}
@@ -403,6 +477,8 @@ def check_findings(study, n_boot=2000, seed=0, ctx=None):
                   _per_sample(study, "percent_passing_22_4mm"), final["void_ratio"], -1,
                   "final VR vs percent passing 22.4 mm"),
         _fpa_finding(ctx),
+        _fpa_level_finding(ctx),
         _breakage_finding(ctx, study),
+        *(_group_pattern(ctx, study, *pattern) for pattern in GROUP_PATTERNS),
         _optimum_finding(ctx),
     ], study)
