@@ -110,7 +110,7 @@ def test_record_numbers_and_files(run, thesis_study, tmp_path):
     assert f"| {db} | {row.group} | {row.percent_passing_22_4mm:.1f} | 4 | {row.settlement * 1e3:.4g} ± " in md
     # the run: its command, wall and CPU hours from the log; stages from the records
     assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h, CPU 2.00 h" in md
-    assert "| case run | 2 | 5.0 | 4.3 |" in md and "abc123" in md
+    assert "| case run | 2 | 5.0 | 4.3 |" in md and "abc123 (bpm build, case run)" in md
     assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 |" in md and "| G_2-1 | - | - | - (0) | 3.3 (1) | 0.06 |" in md
     assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5 mm" in md
     assert "Material parameters of the cases: {\"E_Pa\": 1000000000.0, \"mu\": 0.7}." in md

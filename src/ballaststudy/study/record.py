@@ -54,7 +54,10 @@ def _distinct(records, get):
 
 
 def _run_lines(records, logs, study):
-    commits = _distinct(records, lambda r: r["package"].get("git") or "not recorded")
+    steps_of = {}
+    for rec in records.values():
+        steps_of.setdefault(rec["package"].get("git") or "not recorded", set()).add(rec["step"])
+    commits = [f"{c} ({', '.join(sorted(steps))})" for c, steps in sorted(steps_of.items())]
     hosts = _distinct(records, lambda r: r.get("host", "not recorded"))
     machines = _distinct(records, lambda r: "{processor}, {cpus} logical CPUs, {system}".format(**r["machine"])
                          if "machine" in r else "not recorded (records older than the machine field)")
@@ -63,7 +66,7 @@ def _run_lines(records, logs, study):
     lines = ["## The run", "", f"- Extent: {extent_line(study)}",
              f"- The thesis' {len(scale.THESIS_DATABASES)} databases: {len(scale.THESIS_DATABASES) - len(missing)} "
              f"present" + (f"; **missing: {', '.join(missing)}** (a part of the study)" if missing else ""),
-             f"- Commit{'s' if len(commits) > 1 else ''} of the outputs: {', '.join(commits)}",
+             f"- Commit{'s' if len(commits) > 1 else ''} of the outputs (steps): {'; '.join(commits)}",
              f"- Host{'s' if len(hosts) > 1 else ''}: {', '.join(hosts)}; machine: {'; '.join(machines)}"]
     for log in logs:
         lines.append(f"- `{log.get('command', '?')}`: wall {log['wall_s'] / 3600:.2f} h, CPU "
