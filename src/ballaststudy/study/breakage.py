@@ -9,12 +9,6 @@ from . import stats
 # 1000 load cycles): "the highest value is just above 8".
 THESIS_MAX_MEAN_BREAKAGES = 8.0
 BREAKAGE_CYCLES = (1, 10, 100)   # cycles at which the record says how much breakage had happened
-COUNTS = ("broken_tension", "broken_shear", "breakages_per_cycle")
-
-
-def has_counts(study):
-    """Whether study.nc holds the breakage counts (not only the rates)."""
-    return all(v in study for v in COUNTS)
 
 
 def breakage_counts(study):
@@ -30,10 +24,9 @@ def breakage_counts(study):
 def breakage_timing(study, cycles=BREAKAGE_CYCLES):
     """When and in what units the cases broke, from study.nc: per case that broke, the share
     of its final breakage rate reached by the end of each given cycle (1-based; bonds broken
-    in the static pre-loading count in cycle 1's), as medians; and, where the study holds
-    the cumulative broken counts, the flat-joint elements per case (broken / rate at the
-    last cycle) and the broken elements per case. Cases shorter than a cycle are left out
-    of its share."""
+    in the static pre-loading count in cycle 1's), as medians; the flat-joint elements per
+    case (broken / rate at the last cycle) and the broken elements per case. Cases shorter
+    than a cycle are left out of its share."""
     br = study["breakage_rate"].values.reshape(-1, study.sizes["cycle"])
     final = stats.final_value(br)
     broke = np.isfinite(final) & (final > 0)
@@ -43,8 +36,7 @@ def breakage_timing(study, cycles=BREAKAGE_CYCLES):
             share = br[broke, c - 1] / final[broke]
             if np.isfinite(share).any():
                 out["share"][c] = float(np.nanmedian(share))
-    if has_counts(study):
-        n_broken = breakage_counts(study)[0].reshape(-1)[broke]
-        out["elements"] = np.round(n_broken / final[broke]).astype(int)
-        out["broken"] = n_broken.astype(int)
+    n_broken = breakage_counts(study)[0].reshape(-1)[broke]
+    out["elements"] = np.round(n_broken / final[broke]).astype(int)
+    out["broken"] = n_broken.astype(int)
     return out

@@ -19,7 +19,7 @@ from ..inputs import input_dir, input_file, open_netcdf
 from ..provenance.store import load_records
 from . import optimise, plots, scale, stats
 from .aggregate import BEHAVIOURS
-from .breakage import THESIS_MAX_MEAN_BREAKAGES, breakage_counts, breakage_timing, has_counts
+from .breakage import THESIS_MAX_MEAN_BREAKAGES, breakage_counts, breakage_timing
 from .iri import THESIS_CSV, thesis_markdown
 from .report import extent_line, scale_banner
 from .timing import database_times, of_databases, read_time_log, stage_table
@@ -96,6 +96,10 @@ def _whole(seconds):
     return "-" if np.isnan(seconds) else "< 1" if seconds < 1 else f"{seconds:.0f}"
 
 
+def _minutes(seconds):
+    return "-" if np.isnan(seconds) else f"{seconds / 60:.1f}"
+
+
 def _time_lines(times):
     if times.empty:
         return []
@@ -106,7 +110,7 @@ def _time_lines(times):
     for db, r in times.iterrows():
         lines.append(f"| {db} | {_whole(r.forms_generate_median_s)} | {_whole(r.bpm_build_median_s)} | "
                      f"{_whole(r.case_assemble_median_s)} ({int(r.case_assemble_jobs)}) | "
-                     f"{r.case_run_median_s / 60:.1f} ({int(r.case_run_jobs)}) | {r.core_h:.2f} |".replace("nan", "-"))
+                     f"{_minutes(r.case_run_median_s)} ({int(r.case_run_jobs)}) | {r.core_h:.2f} |")
     return lines + [""]
 
 
@@ -146,19 +150,18 @@ def _breakage_lines(study):
         reached = ", ".join(f"{v * 100:.0f} % by the end of cycle {c}" for c, v in t["share"].items())
         lines.append(f"- When the cases broke (median over the {t['cases_broke']} cases that broke; the static "
                      f"pre-loading counts in cycle 1): {reached} of each case's final breakage rate.")
-    if t.get("elements") is not None and t["elements"].size:
+    if t["elements"].size:
         e = t["elements"]
         lines.append(f"- The unit of breakage: {e.min():,}-{e.max():,} flat-joint elements per case, so one broken "
                      f"element is {100 / e.max():.2g}-{100 / e.min():.2g} % of the breakage rate and the "
                      f"thesis' < 1 % means fewer than {e.min() / 100:.0f}-{e.max() / 100:.0f} broken elements "
                      f"per case; ours broke {int(np.median(t['broken']))} (median; "
                      f"{t['broken'].min()}-{t['broken'].max()}).")
-    if has_counts(study):
-        total, during = (np.nanmean(c, axis=1) for c in breakage_counts(study))
-        lines.append(f"- Broken elements per case, mean per database (Fig. 5-3): {np.nanmin(total):.3g}-"
-                     f"{np.nanmax(total):.3g}, of them during the load cycles {np.nanmin(during):.3g}-"
-                     f"{np.nanmax(during):.3g} (the rest in the static pre-loading); the thesis' highest "
-                     f"database mean is just above {THESIS_MAX_MEAN_BREAKAGES:g} (5.3).")
+    total, during = (np.nanmean(c, axis=1) for c in breakage_counts(study))
+    lines.append(f"- Broken elements per case, mean per database (Fig. 5-3): {np.nanmin(total):.3g}-"
+                 f"{np.nanmax(total):.3g}, of them during the load cycles {np.nanmin(during):.3g}-"
+                 f"{np.nanmax(during):.3g} (the rest in the static pre-loading); the thesis' highest "
+                 f"database mean is just above {THESIS_MAX_MEAN_BREAKAGES:g} (5.3).")
     return lines
 
 
