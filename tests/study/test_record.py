@@ -17,6 +17,8 @@ from ballaststudy.study.breakage import breakage_counts, breakage_timing
 from ballaststudy.study.record import _breakage_lines
 from ballaststudy.study.timing import database_times, of_databases, read_time_log, stage_table
 
+from .parts import split
+
 TIME_LOG = """\
 \tCommand being timed: "snakemake --cores 2 --configfile config/thesis.yaml"
 \tUser time (seconds): 7000.50
@@ -182,3 +184,49 @@ def test_breakage_timing_and_counts_on_planted_counts():
     assert "fewer than 10-20 broken elements" in text and "ours broke 6 (median; 4-10)" in text
     # per database means: totals (10 + 4) / 2 = 7 and (0 + 6) / 2 = 3; during (7 + 4) / 2, (0 + 4) / 2
     assert "mean per database (Fig. 5-3): 3-7, of them during the load cycles 2-5.5 " in text
+
+
+def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
+    """A run in two parts (study pack each, study merge, then iri, optimise, record) gives the
+    record of the whole run: the same tables, and the records and time logs of both parts."""
+    p, res, log = run
+    _, study = thesis_study
+    whole = tmp_path / "whole"
+    args = p.parse_args(["study", "record", str(res), "--out", str(whole)])
+    args.func(args)
+    first, second = split(study, 8, 8)
+    folders = []
+    for k, (part, records) in enumerate(((first, res), (second, None))):
+        folder = tmp_path / f"run{k}"
+        if records is not None:
+            shutil.copytree(records, folder)          # the planted records: G_1-1 and G_2-1, in the first part
+        folder.mkdir(exist_ok=True)
+        part.to_netcdf(folder / "study.nc")
+        if records is None:                            # a case of G_3-1 in the second part
+            side = folder / "cases/G_3-1/case3/metrics.nc.prov.json"
+            side.parent.mkdir(parents=True)
+            side.write_text(json.dumps(dict(_record("case run", "2026-01-02T00:00:00+00:00",
+                                                    "2026-01-02T00:06:00+00:00"),
+                                            output={str(folder / "cases/G_3-1/case3/metrics.nc"): "0"})))
+        folders.append(tmp_path / "parts" / f"part{k}")
+        args = p.parse_args(["study", "pack", str(folder), "--out", str(folders[-1]),
+                             *(["--time-log", str(log)] if k == 0 else [])])
+        args.func(args)
+    assert sorted(x.name for x in folders[0].iterdir()) == ["records.json", "study.nc", "thesis.time"]
+    merged = tmp_path / "merged"
+    args = p.parse_args(["study", "merge", *map(str, folders), "--out", str(merged)])
+    args.func(args)
+    for action, out in (("iri", "study/iri"), ("optimise", "study/report")):
+        args = p.parse_args(["study", action, str(merged / "study.nc"), "--out", str(merged / out),
+                             "--resamples", "200"])
+        args.func(args)
+    out = tmp_path / "from-parts"
+    args = p.parse_args(["study", "record", str(merged), "--out", str(out),
+                         "--time-log", str(folders[0] / "thesis.time")])
+    args.func(args)
+    for name in ("per_database.csv", "iri_thesis.csv", "findings.csv"):
+        assert pd.read_csv(out / name).equals(pd.read_csv(whole / name)), name
+    md = (out / "README.md").read_text()
+    assert f"Merged from the parts (`ballaststudy study merge`): {folders[0]}, {folders[1]}" in md
+    assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 |" in md and "| G_3-1 | - | - | - (0) | 6.0 (1) | 0.10 |" in md
+    assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h" in md

@@ -217,9 +217,16 @@ def aggregate(metrics_paths, forms_paths, out, groups=None):
     ds.attrs["provenance"] = recorder.json()
     out = Path(out)
     with atomic_path(out) as tmp:
-        ds.to_netcdf(tmp, engine="netcdf4")
+        ds.to_netcdf(tmp, engine="netcdf4", encoding=netcdf_encoding(ds))
     recorder.write_beside(out)
     return out
+
+
+def netcdf_encoding(ds):
+    """Lossless compression of the per-cycle variables: a thesis-scale study.nc (16 x 10 x
+    1001 values a behaviour) is kept in the repository in parts (study/parts.py)."""
+    return {n: {"zlib": True, "complevel": 4, "shuffle": True}
+            for n, v in ds.data_vars.items() if v.dtype.kind == "f"}
 
 
 def identify_metrics(path):

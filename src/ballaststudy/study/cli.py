@@ -1,4 +1,4 @@
-"""`ballaststudy study ...`: aggregate, iri, optimise, record. `register(subparsers)` adds the stage to
+"""`ballaststudy study ...`: aggregate, iri, optimise, record, pack, merge. `register(subparsers)` adds the stage to
 the main parser (ballaststudy.cli). Bad input raises ConfigError (file, key, allowed range),
 which the main command prints as one line with exit code 2; no partial outputs are left."""
 
@@ -9,6 +9,7 @@ from ..provenance import Recorder
 from ..inputs import open_netcdf, writable_dir, writable_file
 from .aggregate import BEHAVIOURS, aggregate, identify_metrics
 from .iri import write_iri
+from .parts import merge_parts, pack_part
 from .record import write_record
 from .report import write_report
 from ..argtypes import SEED, integer, number
@@ -83,6 +84,18 @@ def _study_record(args):
         print(f"wrote {path}")
 
 
+def _study_pack(args):
+    writable_dir(args.out)
+    for path in pack_part(args.results, args.out, args.time_log or ()):
+        print(f"wrote {path}")
+
+
+def _study_merge(args):
+    writable_dir(args.out)
+    for path in merge_parts(args.parts, args.out):
+        print(f"wrote {path}")
+
+
 def _analysis_parser(actions, name, help_text):
     """An action reading STUDY.nc into an output folder with seeded bootstrap intervals."""
     p = actions.add_parser(name, help=help_text)
@@ -121,4 +134,16 @@ def register(subparsers):
     r.add_argument("--time-log", action="append", type=Path, metavar="LOG",
                    help="a /usr/bin/time -v log of a snakemake command that made the run (repeat for parts)")
     r.set_defaults(func=_study_record)
+
+    k = ss.add_parser("pack", help="keep a part's study (study.nc, records, time logs) in a folder, e.g. to commit it")
+    k.add_argument("results", type=Path, metavar="RESULTS", help="the part's results folder (its study.nc made)")
+    k.add_argument("--out", required=True, type=Path, help="the part's folder, e.g. docs/thesis-scale/parts/group_3")
+    k.add_argument("--time-log", action="append", type=Path, metavar="LOG",
+                   help="a /usr/bin/time -v log of a snakemake command of the part (repeat)")
+    k.set_defaults(func=_study_pack)
+
+    m = ss.add_parser("merge", help="parts (study pack) -> one results folder: study.nc and the records")
+    m.add_argument("parts", nargs="+", type=Path, metavar="PART", help="part folders written by study pack")
+    m.add_argument("--out", required=True, type=Path, help="results folder for the iri, optimise and record stages")
+    m.set_defaults(func=_study_merge)
     return st

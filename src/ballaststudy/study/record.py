@@ -21,6 +21,7 @@ from . import optimise, plots, scale, stats
 from .aggregate import BEHAVIOURS
 from .breakage import THESIS_MAX_MEAN_BREAKAGES, breakage_counts, breakage_timing
 from .iri import THESIS_CSV, thesis_markdown
+from .parts import PART_RECORDS, load_part_records
 from .report import extent_line, scale_banner
 from .timing import database_times, of_databases, read_time_log, stage_table
 
@@ -66,6 +67,8 @@ def _run_lines(records, logs, study):
     lines = ["## The run", "", f"- Extent: {extent_line(study)}",
              f"- The thesis' {len(scale.THESIS_DATABASES)} databases: {len(scale.THESIS_DATABASES) - len(missing)} "
              f"present" + (f"; **missing: {', '.join(missing)}** (a part of the study)" if missing else ""),
+             *([f"- Merged from the parts (`ballaststudy study merge`): {study.attrs['merged_from']}"]
+               if "merged_from" in study.attrs else []),
              f"- Commit{'s' if len(commits) > 1 else ''} of the outputs (steps): {'; '.join(commits)}",
              f"- Host{'s' if len(hosts) > 1 else ''}: {', '.join(hosts)}; machine: {'; '.join(machines)}"]
     for log in logs:
@@ -215,7 +218,10 @@ def write_record(results_dir, out_dir, time_logs=(), command=None):
     report_dir = results / "study" / "report"
     findings = pd.read_csv(_need(report_dir / "findings.csv", "the optimisation report's findings"))
     ranking = pd.read_csv(_need(report_dir / "ranking.csv", "the optimisation report's ranking"), index_col=0)
-    records = of_databases(load_records(results), [str(d) for d in study.database.values])
+    records = load_records(results)
+    if (results / PART_RECORDS).is_file():      # a results folder merged from parts (study merge)
+        records.update(load_part_records(results / PART_RECORDS))
+    records = of_databases(records, [str(d) for d in study.database.values])
     logs = [read_time_log(p) for p in time_logs]
     figures = [_need(report_dir / name, "a figure of the optimisation report") for name in plots.figure_names()]
     table, stages, times = per_database(study), stage_table(records), database_times(records)
