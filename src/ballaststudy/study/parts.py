@@ -10,13 +10,12 @@ and every record; the IRI, optimisation and record stages then read it as they r
 """
 
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from ..atomic import atomic_path
+from ..atomic import atomic_copy, atomic_path
 from ..inputs import input_dir, input_file, open_netcdf
 from ..provenance import Recorder
 from ..provenance.store import load_records
@@ -29,12 +28,6 @@ PART_RECORDS = "records.json"       # the part's provenance records: a JSON list
 _FILLS = {"cycles_run": 0, "assembly_stages_at_limit": -1}    # per (database, case): no case there
 
 
-def _copy(src, dst):
-    with atomic_path(dst) as tmp:
-        shutil.copyfile(src, tmp)
-    return dst
-
-
 def pack_part(results_dir, out_dir, time_logs=()):
     """Keep the study of ``results_dir`` (its study.nc and the records of its databases'
     jobs and of the study steps) and the given time logs in ``out_dir``; return the paths."""
@@ -45,9 +38,9 @@ def pack_part(results_dir, out_dir, time_logs=()):
     logs = [input_file(p, "expected a /usr/bin/time -v log") for p in time_logs]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = [_copy(study_path, out / PART_STUDY)]
+    written = [atomic_copy(study_path, out / PART_STUDY)]
     written.append(_write_records(out / PART_RECORDS, records))
-    return written + [_copy(p, out / Path(p).name) for p in logs]
+    return written + [atomic_copy(p, out / Path(p).name) for p in logs]
 
 
 def _write_records(path, records):

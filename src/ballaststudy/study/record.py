@@ -7,14 +7,13 @@ it; writes README.md, per_database.csv, stages.csv, database_times.csv, the thes
 comparisons as CSV and the figures as small PNGs."""
 
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from PIL import Image
 
-from ..atomic import atomic_path
+from ..atomic import atomic_copy, atomic_path
 from ..inputs import input_dir, input_file, open_netcdf
 from ..provenance.store import load_records
 from . import optimise, plots, scale, stats
@@ -204,12 +203,6 @@ def _banner(study):
     return [text, ""] if text else []
 
 
-def _copy(src, dst):
-    with atomic_path(dst) as tmp:
-        shutil.copyfile(src, tmp)
-    return dst
-
-
 def write_record(results_dir, out_dir, time_logs=(), command=None):
     """Write the record of the study in ``results_dir`` into ``out_dir``; return the paths."""
     results, out = input_dir(results_dir, "expected a results folder"), Path(out_dir)
@@ -232,8 +225,8 @@ def write_record(results_dir, out_dir, time_logs=(), command=None):
         with atomic_path(out / name) as tmp:
             frame.to_csv(tmp, index=index)
         written.append(out / name)
-    written += [_copy(results / "study" / "iri" / THESIS_CSV, out / THESIS_CSV),
-                _copy(report_dir / "findings.csv", out / "findings.csv")]
+    written += [atomic_copy(results / "study" / "iri" / THESIS_CSV, out / THESIS_CSV),
+                atomic_copy(report_dir / "findings.csv", out / "findings.csv")]
     lines = ["# The thesis-scale study beside Wang 2018, chapter 5", "",
              f"Written by `{command or 'ballaststudy study record'}` from the run's outputs in `{results}`; "
              "regenerate it, do not edit it.", ""]
