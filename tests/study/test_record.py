@@ -212,7 +212,9 @@ def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
         args = p.parse_args(["study", "pack", str(folder), "--out", str(folders[-1]),
                              *(["--time-log", str(log)] if k == 0 else [])])
         args.func(args)
-    assert sorted(x.name for x in folders[0].iterdir()) == ["records.json", "study.nc", "thesis.time"]
+    assert sorted(x.name for x in folders[0].iterdir()) == ["README.md", "records.json", "study.nc", "thesis.time"]
+    readme = (folders[1] / "README.md").read_text()
+    assert "- Cases run per database: G_2-4 2, G_2-5 4, G_3-1 4," in readme and "records of its 1 job;" in readme
     merged = tmp_path / "merged"
     args = p.parse_args(["study", "merge", *map(str, folders), "--out", str(merged)])
     args.func(args)

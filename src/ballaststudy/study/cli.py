@@ -86,7 +86,9 @@ def _study_record(args):
 
 def _study_pack(args):
     writable_dir(args.out)
-    for path in pack_part(args.results, args.out, args.time_log or ()):
+    command = " ".join(["ballaststudy study pack", str(args.results), "--out", str(args.out),
+                        *[f"--time-log {p}" for p in args.time_log or ()]])
+    for path in pack_part(args.results, args.out, args.time_log or (), command):
         print(f"wrote {path}")
 
 

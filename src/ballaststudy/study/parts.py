@@ -21,14 +21,16 @@ from ..provenance import Recorder
 from ..provenance.store import load_records
 from ..schema import ConfigError
 from .aggregate import BEHAVIOURS, database_order_key, netcdf_encoding
+from .report import extent_line
 from .timing import of_databases
 
 PART_STUDY = "study.nc"
 PART_RECORDS = "records.json"       # the part's provenance records: a JSON list
+PART_README = "README.md"
 _FILLS = {"cycles_run": 0, "assembly_stages_at_limit": -1}    # per (database, case): no case there
 
 
-def pack_part(results_dir, out_dir, time_logs=()):
+def pack_part(results_dir, out_dir, time_logs=(), command=None):
     """Keep the study of ``results_dir`` (its study.nc and the records of its databases'
     jobs and of the study steps) and the given time logs in ``out_dir``; return the paths."""
     results = input_dir(results_dir, "expected a part's results folder")
@@ -40,7 +42,25 @@ def pack_part(results_dir, out_dir, time_logs=()):
     out.mkdir(parents=True, exist_ok=True)
     written = [atomic_copy(study_path, out / PART_STUDY)]
     written.append(_write_records(out / PART_RECORDS, records))
-    return written + [atomic_copy(p, out / Path(p).name) for p in logs]
+    written += [atomic_copy(p, out / Path(p).name) for p in logs]
+    with atomic_path(out / PART_README) as tmp:
+        tmp.write_text(_part_readme(study, records, [p.name for p in map(Path, logs)], command))
+    return written + [out / PART_README]
+
+
+def _part_readme(study, records, logs, command):
+    """What the part holds, in words."""
+    ran = (study.cycles_run.values > 0).sum(axis=1)
+    cases = ", ".join(f"{d} {n}" for d, n in zip(map(str, study.database.values), ran))
+    jobs = len({json.dumps(r, sort_keys=True) for r in records.values()})
+    return "\n".join([
+        "# A part of a study run", "",
+        f"Written by `{command or 'ballaststudy study pack'}`; do not edit. Join parts with "
+        "`ballaststudy study merge PART ... --out RESULTS`, then run the study's iri, optimise and record "
+        "stages on RESULTS.", "",
+        f"- Extent: {extent_line(study)}", f"- Cases run per database: {cases}",
+        f"- {PART_STUDY}: the part's study (aggregate of its cases); {PART_RECORDS}: the provenance "
+        f"records of its {jobs} job{'s' if jobs != 1 else ''}; time logs: {', '.join(logs) or 'none'}", ""])
 
 
 def _write_records(path, records):
