@@ -7,7 +7,7 @@ import xarray as xr
 
 from ballaststudy.config import ConfigError
 from ballaststudy.study.aggregate import BEHAVIOURS
-from ballaststudy.study.parts import merge_studies
+from ballaststudy.study.parts import check_one_setting, merge_studies
 
 from .parts import split
 
@@ -58,3 +58,20 @@ def test_every_behaviour_survives_the_merge(thesis_study):
     merged = merge_studies(list(zip("ab", split(study, 3, 3))))
     for name in BEHAVIOURS:
         assert np.array_equal(merged[name].values, study[name].values, equal_nan=True), name
+
+
+def test_parts_run_with_other_settings_are_refused(tmp_path):
+    def run(rig, case=0):
+        return {"step": "case run", "params": {"cycles": 1000, "rig": rig}, "output": {f"m{case}": "0"}}
+
+    def assemble(case):
+        return {"step": "case assemble", "params": {"case": case, "rig": {"width_m": 0.34}}, "output": {f"a{case}": "0"}}
+
+    same = [("a", {"m0": run({"cyclic_v_max_m_s": 0.1}), "a0": assemble(0)}),
+            ("b", {"m1": run({"cyclic_v_max_m_s": 0.1}, 1), "a1": assemble(1),
+                   "s": {"step": "study aggregate", "params": {"x": 1}, "output": {}}})]
+    check_one_setting(same)                        # cases and study steps may differ: one study
+    other = same + [("c", {"m2": run({"cyclic_v_max_m_s": 0.2}, 2)})]
+    with pytest.raises(ConfigError, match=r"c: case run.params.rig.cyclic_v_max_m_s: differs from the same "
+                                          r"step's in a"):
+        check_one_setting(other)

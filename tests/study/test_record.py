@@ -19,6 +19,7 @@ from ballaststudy.study.timing import database_times, of_databases, read_time_lo
 
 from .parts import split
 
+MATERIAL = {"material_parameters": {"E_Pa": 1e9, "mu": 0.7}}   # the planted case runs' parameters
 TIME_LOG = """\
 \tCommand being timed: "snakemake --cores 2 --configfile config/thesis.yaml"
 \tUser time (seconds): 7000.50
@@ -50,12 +51,11 @@ def run(thesis_study, tmp_path_factory):
     for action, out in (("iri", "study/iri"), ("optimise", "study/report")):
         args = p.parse_args(["study", action, str(res / "study.nc"), "--out", str(res / out), "--resamples", "200"])
         args.func(args)
-    material = {"material_parameters": {"E_Pa": 1e9, "mu": 0.7}}
     a, b = "cases/G_1-1/case0", "cases/G_2-1/case0"       # the folders the workflow gives two cases
     planted = [(f"{a}/metrics.nc", _record("case run", "2026-01-01T00:00:00+00:00", "2026-01-01T00:01:40+00:00",
-                                           material)),
+                                           MATERIAL)),
                (f"{b}/metrics.nc", _record("case run", "2026-01-01T00:01:00+00:00", "2026-01-01T00:04:20+00:00",
-                                           material)),
+                                           MATERIAL)),
                ("bpm/G_1-1.nc", _record("bpm build", "2025-12-31T23:00:00+00:00", "2025-12-31T23:00:30+00:00",
                                         {"bpm": {"radius_min": 2.5e-3, "radius_max": 5e-3}}))]
     planted.append((f"{a}/case.png", planted[0][1]))   # one job's record beside each of its outputs
@@ -206,7 +206,7 @@ def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
             side = folder / "cases/G_3-1/case3/metrics.nc.prov.json"
             side.parent.mkdir(parents=True)
             side.write_text(json.dumps(dict(_record("case run", "2026-01-02T00:00:00+00:00",
-                                                    "2026-01-02T00:06:00+00:00"),
+                                                    "2026-01-02T00:06:00+00:00", MATERIAL),
                                             output={str(folder / "cases/G_3-1/case3/metrics.nc"): "0"})))
         folders.append(tmp_path / "parts" / f"part{k}")
         args = p.parse_args(["study", "pack", str(folder), "--out", str(folders[-1]),

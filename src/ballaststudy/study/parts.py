@@ -82,6 +82,36 @@ def load_part_records(path):
     return {str(Path(p)): rec for rec in items for p in rec["output"]}
 
 
+# steps whose settings must be one across a study's parts, and what may differ between their jobs
+SHARED_SETTINGS = {"bpm build": (), "case assemble": ("case",), "case run": ()}
+
+
+def _differing_key(a, b, prefix=""):
+    """The first key (dotted) at which two parameter mappings differ."""
+    for key in sorted(set(a) | set(b)):
+        va, vb = a.get(key), b.get(key)
+        if va != vb:
+            return _differing_key(va, vb, f"{prefix}{key}.") if isinstance(va, dict) and isinstance(vb, dict) \
+                else f"{prefix}{key}"
+    return prefix.rstrip(".")
+
+
+def check_one_setting(per_part):
+    """Refuse parts whose BPM, assembly or loading jobs ran with other settings (another
+    config or material): merged, they would not be one study. per_part: [(records file,
+    {output: record})]."""
+    seen = {}
+    for path, records in per_part:
+        for rec in records.values():
+            if rec.get("step") not in SHARED_SETTINGS:
+                continue
+            params = {k: v for k, v in rec.get("params", {}).items() if k not in SHARED_SETTINGS[rec["step"]]}
+            first = seen.setdefault(rec["step"], (path, params))
+            if params != first[1]:
+                raise ConfigError(path, f"{rec['step']}.params.{_differing_key(first[1], params)}",
+                                  f"differs from the same step's in {first[0]}: the parts are not one study")
+
+
 def _database_coords(ds):
     """Coordinates along `database` (other than its labels): name -> (dims, attrs)."""
     return {n: (c.dims, dict(c.attrs)) for n, c in ds.coords.items()
@@ -159,9 +189,9 @@ def merge_parts(part_dirs, out_dir):
     studies = [input_file(d / PART_STUDY, "expected a part's study.nc (study pack)") for d in dirs]
     record_files = [input_file(d / PART_RECORDS, "expected a part's records.json (study pack)") for d in dirs]
     parts = [(p, open_netcdf(p, "study", require=tuple(BEHAVIOURS))) for p in studies]
-    records = {}
-    for path in record_files:
-        records.update(load_part_records(path))
+    per_part = [(path, load_part_records(path)) for path in record_files]
+    check_one_setting(per_part)
+    records = {k: rec for _, part in per_part for k, rec in part.items()}
     recorder = Recorder("study merge", inputs=[str(p) for p in studies + record_files],
                         params={"parts": [str(d) for d in dirs]})
     ds = merge_studies(parts)
