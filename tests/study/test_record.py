@@ -201,6 +201,8 @@ def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
         if records is not None:
             shutil.copytree(records, folder)          # the planted records: G_1-1 and G_2-1, in the first part
         folder.mkdir(exist_ok=True)
+        if records is not None:                        # a rig record per cycle, which the pack leaves out
+            part = part.assign(cycle_steps=part.settlement * 0 + 7000.0)
         part.to_netcdf(folder / "study.nc")
         if records is None:                            # a case of G_3-1 in the second part
             side = folder / "cases/G_3-1/case3/metrics.nc.prov.json"
@@ -213,6 +215,8 @@ def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
                              *(["--time-log", str(log)] if k == 0 else [])])
         args.func(args)
     assert sorted(x.name for x in folders[0].iterdir()) == ["README.md", "records.json", "study.nc", "thesis.time"]
+    with xr.open_dataset(folders[0] / "study.nc") as kept:
+        assert "cycle_steps" not in kept and kept.attrs["kept_by_study_pack"].endswith(": cycle_steps")
     readme = (folders[1] / "README.md").read_text()
     assert "- Cases run per database: G_2-4 2, G_2-5 4, G_3-1 4," in readme and "records of its 1 job;" in readme
     merged = tmp_path / "merged"

@@ -40,12 +40,28 @@ def pack_part(results_dir, out_dir, time_logs=(), command=None):
     logs = [input_file(p, "expected a /usr/bin/time -v log") for p in time_logs]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = [atomic_copy(study_path, out / PART_STUDY)]
+    kept = kept_study(study)
+    with atomic_path(out / PART_STUDY) as tmp:
+        kept.to_netcdf(tmp, engine="netcdf4", encoding=netcdf_encoding(kept))
+    written = [out / PART_STUDY]
     written.append(_write_records(out / PART_RECORDS, records))
     written += [atomic_copy(p, out / Path(p).name) for p in logs]
     with atomic_path(out / PART_README) as tmp:
         tmp.write_text(_part_readme(study, records, [p.name for p in map(Path, logs)], command))
     return written + [out / PART_README]
+
+
+def kept_study(study):
+    """The part's study as kept: the behaviours the study stages read and the per-case
+    counts; the rig's other per-cycle records (a third of the size: force bounds, plate
+    position, steps) stay in each case's metrics.nc."""
+    names = [*BEHAVIOURS, *_FILLS]
+    dropped = sorted(n for n in study.data_vars if n not in names)
+    kept = study[names].copy()
+    kept.attrs = dict(study.attrs, kept_by_study_pack=(
+        "the behaviours and per-case counts of the part's study.nc; left out (in each case's metrics.nc): "
+        + (", ".join(dropped) or "nothing")))
+    return kept
 
 
 def _part_readme(study, records, logs, command):
