@@ -88,6 +88,7 @@ def test_time_log_and_stages(run, tmp_path):
     assert times.loc["G_1-1", "bpm_build_median_s"] == 30 and times.loc["G_1-1", "case_run_median_s"] == 100
     assert times.loc["G_2-1", "case_run_jobs"] == 1 and times.loc["G_2-1", "case_run_median_s"] == 200
     assert times.loc["G_1-1", "core_h"] == 130 / 3600 and np.isnan(times.loc["G_2-1", "bpm_build_median_s"])
+    assert times.loc["G_1-1", "processors"] == "CPU X"
     # a part run's folder may hold jobs of databases the study does not hold yet: left out
     kept = of_databases(load_records(res), ["G_1-1"])
     assert sum(r["step"] == "case run" for r in kept.values()) == 2          # beside its two outputs
@@ -113,7 +114,8 @@ def test_record_numbers_and_files(run, thesis_study, tmp_path):
     # the run: its command, wall and CPU hours from the log; stages from the records
     assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h, CPU 2.00 h" in md
     assert "| case run | 2 | 5.0 | 4.3 |" in md and "abc123 (bpm build, case run)" in md
-    assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 |" in md and "| G_2-1 | - | - | - (0) | 3.3 (1) | 0.06 |" in md
+    assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 | CPU X |" in md
+    assert "| G_2-1 | - | - | - (0) | 3.3 (1) | 0.06 | CPU X |" in md
     assert "CPU X, 2 logical CPUs, Linux" in md and "2.5-5 mm" in md
     assert "Material parameters of the cases: {\"E_Pa\": 1000000000.0, \"mu\": 0.7}." in md
     assert "The thesis' 15 databases: 15 present\n" in md
@@ -209,6 +211,7 @@ def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
             side.parent.mkdir(parents=True)
             side.write_text(json.dumps(dict(_record("case run", "2026-01-02T00:00:00+00:00",
                                                     "2026-01-02T00:06:00+00:00", MATERIAL),
+                                            machine={"processor": "CPU Y", "cpus": 2, "system": "Linux"},
                                             output={str(folder / "cases/G_3-1/case3/metrics.nc"): "0"})))
         folders.append(tmp_path / "parts" / f"part{k}")
         args = p.parse_args(["study", "pack", str(folder), "--out", str(folders[-1]),
@@ -234,5 +237,6 @@ def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
         assert pd.read_csv(out / name).equals(pd.read_csv(whole / name)), name
     md = (out / "README.md").read_text()
     assert f"Merged from the parts (`ballaststudy study merge`): {folders[0]}, {folders[1]}" in md
-    assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 |" in md and "| G_3-1 | - | - | - (0) | 6.0 (1) | 0.10 |" in md
+    assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 | CPU X |" in md
+    assert "| G_3-1 | - | - | - (0) | 6.0 (1) | 0.10 | CPU Y |" in md     # the second part's machine
     assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h" in md

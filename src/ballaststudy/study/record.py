@@ -107,12 +107,12 @@ def _time_lines(times):
         return []
     lines = ["Per database (median per case, since a case resumed from a checkpoint counts from its resume; "
              "jobs in brackets):", "",
-             "| database | forms s | bpm s | assembly s per case | loading min per case | core h |",
-             "|---|---|---|---|---|---|"]
+             "| database | forms s | bpm s | assembly s per case | loading min per case | core h | processor |",
+             "|---|---|---|---|---|---|---|"]
     for db, r in times.iterrows():
         lines.append(f"| {db} | {_whole(r.forms_generate_median_s)} | {_whole(r.bpm_build_median_s)} | "
                      f"{_whole(r.case_assemble_median_s)} ({int(r.case_assemble_jobs)}) | "
-                     f"{_minutes(r.case_run_median_s)} ({int(r.case_run_jobs)}) | {r.core_h:.2f} |")
+                     f"{_minutes(r.case_run_median_s)} ({int(r.case_run_jobs)}) | {r.core_h:.2f} | {r.processors} |")
     return lines + [""]
 
 

@@ -98,12 +98,14 @@ def of_databases(records, names):
 def database_times(records):
     """Per database: seconds of its form database and BPM library, and per case the median
     seconds of assembly and of the loading run (cases resumed from a checkpoint count from
-    their resume, so the median), with the number of jobs and the core hours in all."""
-    seconds = {}
+    their resume, so the median), with the number of jobs, the core hours in all and the
+    processors that ran them."""
+    seconds, machines = {}, {}
     for rec in _jobs(records):
         db = database_of(rec)
         if db is not None:
             seconds.setdefault(db, {}).setdefault(rec["step"], []).append(_seconds(rec))
+            machines.setdefault(db, set()).add(rec.get("machine", {}).get("processor", "not recorded"))
     rows = []
     for db, steps in sorted(seconds.items()):
         row = {"database": db}
@@ -113,5 +115,6 @@ def database_times(records):
             row[f"{key}_jobs"] = len(got)
             row[f"{key}_median_s"] = float(np.median(got)) if got else np.nan
         row["core_h"] = sum(sum(v) for v in steps.values()) / 3600
+        row["processors"] = "; ".join(sorted(machines[db]))    # parts may run on machines 2x apart
         rows.append(row)
     return pd.DataFrame(rows).set_index("database") if rows else pd.DataFrame()
