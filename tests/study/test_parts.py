@@ -62,7 +62,8 @@ def test_every_behaviour_survives_the_merge(thesis_study):
 
 def test_parts_run_with_other_settings_are_refused(tmp_path):
     def run(rig, case=0):
-        return {"step": "case run", "params": {"cycles": 1000, "rig": rig}, "output": {f"m{case}": "0"}}
+        return {"step": "case run", "params": {"cycles": 1000, "rig": rig, "scenario_key": f"specimen{case}"},
+                "output": {f"m{case}": "0"}}
 
     def assemble(case):
         return {"step": "case assemble", "params": {"case": case, "rig": {"width_m": 0.34}}, "output": {f"a{case}": "0"}}

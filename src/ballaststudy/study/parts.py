@@ -98,8 +98,9 @@ def load_part_records(path):
     return {str(Path(p)): rec for rec in items for p in rec["output"]}
 
 
-# steps whose settings must be one across a study's parts, and what may differ between their jobs
-SHARED_SETTINGS = {"bpm build": (), "case assemble": ("case",), "case run": ()}
+# steps whose settings must be one across a study's parts, and what may differ between their
+# jobs: the case index, and the scenario's cache key (a hash that includes the specimen)
+SHARED_SETTINGS = {"bpm build": (), "case assemble": ("case",), "case run": ("scenario_key",)}
 
 
 def _differing_key(a, b, prefix=""):
