@@ -38,7 +38,7 @@ def study(tmp_path_factory):
     dbs["databases"] = {k: dbs["databases"][k] for k in ("G_1-5", "box_test")}
     (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["study"]["cases_per_database"] = 1
+    cfg["study"]["cases_per_database"] = 2     # two real case records for study merge to compare
     cfg["rig"]["box"]["loading"]["cycles"] = 2
     (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
     _snakemake(d, "forms_report")
@@ -258,7 +258,7 @@ def test_whole_chain_runs_and_reruns_only_what_changed(tmp_path):
     dbs["databases"] = {"box_test": dbs["databases"]["box_test"]}
     (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["study"]["cases_per_database"] = 1
+    cfg["study"]["cases_per_database"] = 2     # two real case records for study merge to compare
     cfg["rig"]["box"]["loading"]["cycles"] = 2
     (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
     _snakemake(d)
@@ -272,13 +272,23 @@ def test_whole_chain_runs_and_reruns_only_what_changed(tmp_path):
                          capture_output=True, text=True)
     assert rec.returncode == 0, rec.stderr
     md = (d / "record" / "README.md").read_text()
-    for step in ("forms generate", "bpm build", "case assemble", "case run", "study aggregate"):
-        assert f"| {step} | 1 |" in md, step
+    for step, jobs in (("forms generate", 1), ("bpm build", 1), ("case assemble", 2), ("case run", 2),
+                       ("study aggregate", 1)):
+        assert f"| {step} | {jobs} |" in md, step
     assert "0 present; **missing: G_1-1" in md and "logical CPUs" in md and "| box_test | " in md
+    # the same run kept as a part (study pack) and merged back: the record's tables are the run's
+    for args in (["pack", "results", "--out", "part"], ["merge", "part", "--out", "merged"],
+                 ["iri", "merged/study.nc", "--out", "merged/study/iri"],
+                 ["optimise", "merged/study.nc", "--out", "merged/study/report"],
+                 ["record", "merged", "--out", "record_merged"]):
+        run = subprocess.run(["ballaststudy", "study", *args], cwd=d, capture_output=True, text=True)
+        assert run.returncode == 0, (args, run.stderr)
+    for name in ("per_database.csv", "database_times.csv", "iri_thesis.csv", "findings.csv"):
+        assert (d / "record_merged" / name).read_text() == (d / "record" / name).read_text(), name
     with _edited(d / "config" / "config.yaml", lambda c: _loading(c).update(cyclic_max_kN=40.0)):
         jobs = _jobs(_snakemake(d, "-n"))
-    assert "case_assemble" not in jobs and jobs.get("case_run") == 1, jobs
+    assert "case_assemble" not in jobs and jobs.get("case_run") == 2, jobs
     assert jobs.get("study_aggregate") == 1, jobs
     with _edited(d / "config" / "config.yaml", lambda c: c["rig"]["box"]["assembly"].update(plate_width_m=0.28)):
         jobs = _jobs(_snakemake(d, "-n"))
-    assert jobs.get("case_assemble") == 1 and jobs.get("case_run") == 1 and "bpm_build" not in jobs, jobs
+    assert jobs.get("case_assemble") == 2 and jobs.get("case_run") == 2 and "bpm_build" not in jobs, jobs
