@@ -38,7 +38,7 @@ def study(tmp_path_factory):
     dbs["databases"] = {k: dbs["databases"][k] for k in ("G_1-5", "box_test")}
     (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["study"]["cases_per_database"] = 2     # two real case records for study merge to compare
+    cfg["study"]["cases_per_database"] = 1
     cfg["rig"]["box"]["loading"]["cycles"] = 2
     (d / "config" / "config.yaml").write_text(yaml.safe_dump(cfg))
     _snakemake(d, "forms_report")
