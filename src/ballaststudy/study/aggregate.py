@@ -126,7 +126,8 @@ _COORD_ATTRS = {
 }
 
 
-def _label_key(v):
+def case_label_key(v):
+    """Sort key of a case label: integer labels in order, then the others by name."""
     return (0, v, "") if isinstance(v, (int, np.integer)) else (1, 0, str(v))
 
 
@@ -142,7 +143,7 @@ def build_study(metrics, forms, groups=None):
     missing = [db for db in dbs if db not in forms]
     if missing:
         raise ConfigError("study aggregate", "forms", f"no form database for {', '.join(missing)}")
-    cases = sorted({c for _, c in metrics}, key=_label_key)
+    cases = sorted({c for _, c in metrics}, key=case_label_key)
     if not all(isinstance(c, (int, np.integer)) for c in cases):
         cases = [str(c) for c in cases]
     series = {key: _case_series(path, ds) for key, (path, ds) in metrics.items()}

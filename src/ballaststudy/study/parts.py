@@ -20,7 +20,7 @@ from ..inputs import input_dir, input_file, open_netcdf
 from ..provenance import Recorder
 from ..provenance.store import load_records
 from ..schema import ConfigError
-from .aggregate import BEHAVIOURS, database_order_key, netcdf_encoding
+from .aggregate import BEHAVIOURS, case_label_key, database_order_key, netcdf_encoding
 from .report import extent_line
 from .timing import of_databases
 
@@ -142,7 +142,7 @@ def _same(a, b):
     return a.shape == b.shape and bool(np.all(a == b))
 
 
-def _check_variables(parts):
+def _common_variables(parts):
     """The (database, case, cycle) variables every part holds, with the first part's attrs."""
     per_case = [{n for n, v in ds.data_vars.items() if v.dims == ("database", "case", "cycle")} for _, ds in parts]
     common = set.intersection(*per_case)
@@ -158,9 +158,9 @@ def merge_studies(parts):
         raise ConfigError("study merge", None, "no parts given")
     dbs = sorted({str(d) for _, ds in parts for d in ds.database.values}, key=database_order_key)
     labels = [c for _, ds in parts for c in ds.case.values.tolist()]
-    cases = sorted(set(labels), key=lambda c: (isinstance(c, str), c))
+    cases = sorted(set(labels), key=case_label_key)
     cycles = np.unique(np.concatenate([ds.cycle.values for _, ds in parts]))
-    variables = _check_variables(parts)
+    variables = _common_variables(parts)
     shape = (len(dbs), len(cases), len(cycles))
     data = {n: np.full(shape, np.nan) for n in variables}
     per_case = {n: np.full(shape[:2], fill, dtype=np.int32) for n, fill in _FILLS.items()}
