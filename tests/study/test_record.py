@@ -240,3 +240,19 @@ def test_record_from_parts_equals_the_whole_runs(run, thesis_study, tmp_path):
     assert "| G_1-1 | - | 30 | - (0) | 1.7 (1) | 0.04 | CPU X |" in md
     assert "| G_3-1 | - | - | - (0) | 6.0 (1) | 0.10 | CPU Y |" in md     # the second part's machine
     assert "`snakemake --cores 2 --configfile config/thesis.yaml`: wall 1.03 h" in md
+
+
+def test_pack_refuses_a_time_log_record_would_refuse(run, thesis_study, tmp_path):
+    """An empty time log (its /usr/bin/time killed with the run) is refused by pack as record
+    refuses it, naming the file, and nothing of the part is written."""
+    p, res, log = run
+    folder = tmp_path / "run"
+    shutil.copytree(res, folder)
+    thesis_study[1].to_netcdf(folder / "study.nc")
+    empty = tmp_path / "killed.time"
+    empty.write_text("")
+    args = p.parse_args(["study", "pack", str(folder), "--out", str(tmp_path / "part"),
+                         "--time-log", str(log), "--time-log", str(empty)])
+    with pytest.raises(ConfigError, match="killed.time.*Elapsed"):
+        args.func(args)
+    assert not (tmp_path / "part").exists()

@@ -22,7 +22,7 @@ from ..provenance.store import load_records
 from ..schema import ConfigError
 from .aggregate import BEHAVIOURS, case_label_key, database_order_key, netcdf_encoding
 from .report import extent_line
-from .timing import of_databases
+from .timing import of_databases, read_time_log
 
 PART_STUDY = "study.nc"
 PART_RECORDS = "records.json"       # the part's provenance records: a JSON list
@@ -37,7 +37,8 @@ def pack_part(results_dir, out_dir, time_logs=(), command=None):
     study_path = input_file(results / "study.nc", "expected study.nc (run the part's study stages first)")
     study = open_netcdf(study_path, "study", require=tuple(BEHAVIOURS))
     records = of_databases(load_records(results), [str(d) for d in study.database.values])
-    logs = [input_file(p, "expected a /usr/bin/time -v log") for p in time_logs]
+    # read each log as the record stage will, so a part never keeps one record refuses
+    logs = [Path(read_time_log(p)["log"]) for p in time_logs]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     kept = kept_study(study)
