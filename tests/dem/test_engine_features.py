@@ -116,6 +116,25 @@ def test_per_body_damping():
     assert math.isclose(v1, 0.5 * v0, rel_tol=0.02), (v0, v1)   # first half step undamped (v = 0)
 
 
+def test_local_damping_force_is_alpha_times_the_weight_against_the_motion():
+    """Free flight under gravity, alpha = 0.5 on two balls and a clump: the damping force
+    is +alpha m g on a falling body and -alpha m g on a rising one (it opposes the motion,
+    |F| = m g); nothing on an undamped ball or a y-held one, and nothing sideways (F_x = 0)."""
+    sim = Simulation(gravity=(0, -9.81), domain=(-1, -1, 1, 1))
+    sim.add_balls([0.0, 0.1, 0.2, 0.3], [0.0] * 4, [0.01] * 4, 2650.0, vy=[-1.0, 1.0, -1.0, -1.0])
+    lump = sim.add_clump([0.5, 0.52], [0.0, 0.0], [0.01, 0.01], 2650.0)
+    sim.set_clump_velocity(lump, vel=(0.0, 1.0))
+    sim.set_damping(0.5, balls=[0, 1, 3], clump_alpha=0.5, clumps=[lump])
+    sim.set_ball_velocity([3], hold=2)
+    sim.run(10)
+    w = 9.81 * sim.balls.mass[:4]
+    f = sim.local_damping_force([0, 1, 2, 3])
+    assert np.allclose(f[:, 0], 0.0)
+    assert f[:, 1] == pytest.approx([0.5 * w[0], -0.5 * w[1], 0.0, 0.0], rel=1e-9, abs=1e-15)
+    fc = sim.local_damping_force(lump, clumps=True)
+    assert fc[0] == pytest.approx([0.0, -0.5 * 9.81 * sim.clumps.mass[lump]], rel=1e-9, abs=1e-15)
+
+
 def test_contact_state_slip_work_is_the_friction_dissipated_at_that_contact():
     """Persistent per-contact state: a disk sliding on a wall (no dashpots, no damping)
     dissipates all its friction at one contact; that contact's slip_work equals the

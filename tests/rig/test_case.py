@@ -56,30 +56,38 @@ def test_stage_stopped_at_its_limit_is_recorded(small_library, small_params, ass
 
 def test_static_force_balance(assembled, small_params):
     """At the end of static loading (30 kN reached), the loading ball held still: loading
-    force + weight of the stones and the plate = bottom + side-wall vertical forces within
-    2 % of the static target (side walls count with their sign: stones heaving at the walls
-    are held down by friction). Why a settling window and why the target as the scale: the
-    held plate unloads as the coarse packing creeps, and in the first ~2000 steps after
-    holding the stones' deceleration is part of the balance (measured up to 8 % of the
-    target, then within 0.6 % from 3000 steps on); as the load falls, a ratio to the current
-    load would measure the creep, not the balance. The exact accounting of every external
-    force, step by step, is test_static_loads_and_momentum_balance."""
+    force + weight of the stones and the plate = bottom + side-wall vertical forces + the
+    local damping force on the stones and the plate, within 0.5 % of the static target
+    (measured: within 0.11 % in the first 1000 steps after holding, 0.03 % from 2000 on).
+    Side walls count with their sign: stones heaving at the walls are held down by
+    friction. Local damping is a force from outside the packing: the held plate unloads as
+    the coarse packing creeps (30.7 to 25.6 kN over 5000 steps), and on that moving packing
+    it carried 1.2-2.4 % of the target (2026-11-29, AMD EPYC: this test failed there while
+    it left damping out; an earlier machine's trajectory had stayed within 0.6 %). Why a
+    settling window and the target as the scale: in the first ~2000 steps after holding the
+    stones' deceleration is part of the balance, and as the load falls a ratio to the
+    current load would measure the creep. The exact accounting of every external force,
+    step by step, is test_static_loads_and_momentum_balance."""
     rig = BoxRig.load(assembled[0])
     run = LoadingRun(rig, cycles=1)
     while run.s.phase == "static":
         run.advance()
     target = 1e3 * small_params.static_loads_kN[-1]
     assert rig.loading_force() > 0.8 * target
-    rig.sim.set_clump_velocity(rig.layout.loading, vel=(0.0, 0.0), held=True)
-    rig.sim.run(3000)
-    weight = rig.weight() - rig.sim.clumps.mass[rig.layout.loading] * rig.params.gravity_m_s2
+    sim, lay = rig.sim, rig.layout
+    sim.set_clump_velocity(lay.loading, vel=(0.0, 0.0), held=True)
+    sim.run(3000)
+    weight = rig.weight() - sim.clumps.mass[lay.loading] * rig.params.gravity_m_s2
+    stones = rig.stone_balls()
     lhs, rhs = [], []
     for _ in range(50):
-        rig.sim.run(20)
-        lhs.append(rig.loading_force() + weight)
+        sim.run(20)
+        damping = (sim.local_damping_force(stones)[:, 1].sum()
+                   + sim.local_damping_force(lay.plate, clumps=True)[0, 1])
+        lhs.append(rig.loading_force() + weight - damping)
         rhs.append(rig.bottom_forces().sum() - rig.side_forces()[:, 1].sum())
     lhs, rhs = np.mean(lhs), np.mean(rhs)
-    assert abs(lhs - rhs) / target < 0.02, f"plate load + weight {lhs:.1f} N, walls {rhs:.1f} N"
+    assert abs(lhs - rhs) / target < 0.005, f"plate load + weight - damping {lhs:.1f} N, walls {rhs:.1f} N"
 
 
 STEPS = 300     # a short window: the held ball unloads as the packing creeps

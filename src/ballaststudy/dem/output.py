@@ -24,6 +24,30 @@ def clump_force(sim, cid):
     return sim.clumps.force[cid].copy(), float(sim.clumps.moment[cid])
 
 
+def local_damping_force(sim, ids=None, clumps=False):
+    """The local damping force on balls ``ids`` (clumps ``ids`` if ``clumps``; all if None)
+    in the last step [N], rows (fx, fy): a force from outside the system
+    (integrate.locally_damped), so a balance of loads and reactions on a damped packing
+    must count it. The engine keeps only the damped net force F_d = F - alpha |F| sign(v_h),
+    v_h the half-step velocity the damping saw; F_d has F's sign (alpha < 1) and the last
+    half kick gives v_h = v - dt/2 F_d / m, so F = F_d / (1 - alpha sign(v_h) sign(F_d))
+    exactly. Zero for pebbles (their clump is damped as a whole), dead balls, held clumps
+    and velocity-held dofs."""
+    body = sim.clumps if clumps else sim.balls
+    ids = np.arange(len(body.mass)) if ids is None else np.atleast_1d(ids)
+    fd = body.force[ids]
+    if clumps:
+        vh = body.vel[ids] - 0.5 * sim.dt * fd / body.mass[ids, None]
+        damped = body.held[ids] == 0
+        held = np.zeros(fd.shape, bool)
+    else:
+        vh = body.vel[ids] - 0.5 * sim.dt * fd * body.minv[ids, None]
+        damped = (body.alive[ids] == 1) & (body.clump[ids] < 0)
+        held = np.column_stack([body.fix[ids] & 1, body.fix[ids] & 2]) != 0
+    alpha = np.where(held, 0.0, np.where(damped, body.damp[ids], 0.0)[:, None])
+    return fd - fd / (1.0 - alpha * np.sign(vh) * np.sign(fd))
+
+
 def contact_list(sim):
     """Ball-ball and ball-wall contacts with a force: dict of arrays i, j (j = -1 - segment
     for walls), force on j (for walls: on the ball) fx, fy, contact point x, y."""

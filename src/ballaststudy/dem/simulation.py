@@ -633,6 +633,11 @@ class Simulation:
         """(force [N], moment about the centre of mass [N m]) on clump ``cid``."""
         return output.clump_force(self, cid)
 
+    def local_damping_force(self, ids=None, clumps=False):
+        """Local damping force on balls (clumps if ``clumps``) ``ids`` (all if None) in the
+        last step [N], (k, 2)."""
+        return output.local_damping_force(self, ids, clumps)
+
     def contact_list(self):
         """Contacts carrying force: i, j (wall: -1 - segment), fx, fy on j, x, y."""
         return output.contact_list(self)
