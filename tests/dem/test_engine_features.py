@@ -117,9 +117,10 @@ def test_per_body_damping():
 
 
 def test_local_damping_force_is_alpha_times_the_weight_against_the_motion():
-    """Free flight under gravity, alpha = 0.5 on two balls and a clump: the damping force
-    is +alpha m g on a falling body and -alpha m g on a rising one (it opposes the motion,
-    |F| = m g); nothing on an undamped ball or a y-held one, and nothing sideways (F_x = 0)."""
+    """Free flight under gravity, alpha = 0.5 on three balls (one y-held) and a clump: the
+    damping force is +alpha m g on a falling body and -alpha m g on a rising one (it opposes
+    the motion, |F| = m g); nothing on an undamped ball or the y-held one, nothing sideways
+    (F_x = 0). alpha = 1 is refused (a force damped to zero cannot be recovered)."""
     sim = Simulation(gravity=(0, -9.81), domain=(-1, -1, 1, 1))
     sim.add_balls([0.0, 0.1, 0.2, 0.3], [0.0] * 4, [0.01] * 4, 2650.0, vy=[-1.0, 1.0, -1.0, -1.0])
     lump = sim.add_clump([0.5, 0.52], [0.0, 0.0], [0.01, 0.01], 2650.0)
@@ -133,6 +134,9 @@ def test_local_damping_force_is_alpha_times_the_weight_against_the_motion():
     assert f[:, 1] == pytest.approx([0.5 * w[0], -0.5 * w[1], 0.0, 0.0], rel=1e-9, abs=1e-15)
     fc = sim.local_damping_force(lump, clumps=True)
     assert fc[0] == pytest.approx([0.0, -0.5 * 9.81 * sim.clumps.mass[lump]], rel=1e-9, abs=1e-15)
+    sim.set_damping(1.0, balls=[0])
+    with pytest.raises(ValueError, match="alpha >= 1"):
+        sim.local_damping_force([0])
 
 
 def test_contact_state_slip_work_is_the_friction_dissipated_at_that_contact():

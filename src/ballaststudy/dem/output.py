@@ -32,7 +32,7 @@ def local_damping_force(sim, ids=None, clumps=False):
     v_h the half-step velocity the damping saw; F_d has F's sign (alpha < 1) and the last
     half kick gives v_h = v - dt/2 F_d / m, so F = F_d / (1 - alpha sign(v_h) sign(F_d))
     exactly. Zero for pebbles (their clump is damped as a whole), dead balls, held clumps
-    and velocity-held dofs."""
+    and velocity-held dofs. alpha >= 1 is refused: a force damped to zero hides F."""
     body = sim.clumps if clumps else sim.balls
     ids = np.arange(len(body.mass)) if ids is None else np.atleast_1d(ids)
     fd = body.force[ids]
@@ -45,6 +45,8 @@ def local_damping_force(sim, ids=None, clumps=False):
         damped = (body.alive[ids] == 1) & (body.clump[ids] < 0)
         held = np.column_stack([body.fix[ids] & 1, body.fix[ids] & 2]) != 0
     alpha = np.where(held, 0.0, np.where(damped, body.damp[ids], 0.0)[:, None])
+    if np.any(alpha >= 1.0):
+        raise ValueError("local_damping_force: alpha >= 1 on a damped body, its force is not recoverable")
     return fd - fd / (1.0 - alpha * np.sign(vh) * np.sign(fd))
 
 
