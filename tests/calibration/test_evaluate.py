@@ -97,6 +97,29 @@ def test_scenario_key_changes_with_what_decides_the_cases(specimen):
     assert key != _key(specimen, {"mu": 0.7, "F_str_co": 3.5}, cycles=6)
 
 
+def test_scenario_key_leaves_out_what_does_not_act(specimen):
+    """A quasi-static test's f and a covariate no modifier reads decide nothing: scenarios
+    that differ only in them are one key (one run); the rate effect's real time reads f,
+    fouling reads VCI, and a config in real time reads f: other keys."""
+    def key(f=5.0, vci=None, modifiers=(), mode=None):
+        cond = {"rig": "triaxial", "confining_pressure_kPa": 60.0, "deviator_min_kPa": 15.0,
+                "deviator_max_kPa": 230.0, "frequency_Hz": f,
+                "covariates": {"VCI": {"value": vci, "units": "%"}} if vci is not None else {}}
+        rig, _ = conditioned_rig("biaxial", {}, cond, mode=mode)
+        return scenario("biaxial", [specimen], rig, 3, list(modifiers), cond).key
+
+    rate = [("rate", {"contact_damping_ratio": 0.3})]
+    fouling = [("fouling", {"friction_loss": 0.5})]
+    abrasion = [("abrasion", {"wear_per_cycle": 0.01})]
+    assert key(5.0) == key(60.0) and key(5.0, abrasion) == key(60.0, abrasion)
+    assert key(5.0, modifiers=rate) != key(60.0, modifiers=rate) != key(60.0)
+    assert key(5.0, mode="real_time") != key(60.0, mode="real_time") != key(60.0)
+    assert key(5.0, mode="real_time") != key(5.0, modifiers=rate)        # the dashpot
+    assert key(5.0, vci=20.0) == key(5.0, vci=60.0) == key(5.0)
+    assert key(5.0, 20.0, fouling) != key(5.0, 60.0, fouling) == key(60.0, 60.0, fouling)
+    assert key(5.0, 60.0, fouling) != key(5.0, None, fouling)
+
+
 def test_scenario_key_sees_the_specimens_content_not_their_names(specimen, small_library, tmp_path):
     """The same specimen under another name: the same cases; another specimen under the
     first one's name (re-assembled from another seed): other cases."""

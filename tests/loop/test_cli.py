@@ -84,6 +84,7 @@ def test_loop_end_to_end(tiny, tmp_path):
     assert "Stress mapping: **none**" in text
     with xr.open_dataset(out / "loop.nc") as ds:
         assert ds["plain"].shape == (3, 2, 5) and ds["candidate"].shape == (1, 4, 3, 2, 5)
+        assert np.array_equal(ds["plain"].values[0], ds["plain"].values[1])      # t0, t1: one run
         refined = ds["candidate_value"].values[0, 2:, 0]       # the grid's 2 sets, then 1 round of 2
         assert np.all((refined > 0.0) & (refined < 1.2)) and refined[0] < refined[1]
         assert ds["measured"].size == 15                  # 5 points per test within N <= 5
@@ -98,7 +99,9 @@ def test_loop_end_to_end(tiny, tmp_path):
     assert cands[0]["tests"] == 3 and 0.0 <= cands[0]["mean"][0] <= 1.2
     assert (out / "curves.png").is_file() and (out / "report.md.prov.json").is_file()
     cached = sorted((out / "cases").rglob("*.nc"))
-    assert len(cached) == 2 * 3 * (1 + 2 + 2)           # K x tests x (plain + 2 design + 2 refined sets)
+    # K x runs x (plain + 2 design + 2 refined sets): t0 and t1 differ in f only, one run
+    # quasi-static (the scenario key leaves f out), so 2 runs for the 3 tests
+    assert len(cached) == 2 * 2 * (1 + 2 + 2)
     assert "at 2 parameter sets each + 1 x 2 refined around the held-out posteriors" in text
     stamp = [p.stat().st_mtime_ns for p in cached]
     assert main(_argv(tiny, out)) == 0                   # again: every case reused (no law: nothing extrapolated)

@@ -210,6 +210,31 @@ def test_abrasion_over_cycles_and_resumed_through_the_runner(setup, monkeypatch)
           f"joints worn at the end {int(np.sum(full_records[-1][1] < sigc0))} of {len(sigc0)}")
 
 
+def test_a_quasi_static_case_is_one_run_whatever_the_tests_frequency(setup):
+    """The scenario key leaves a quasi-static test's f out (BiaxialParams.inert_keys): two
+    tests that differ only in f get one case file from one run (labelled by the first),
+    and the second test's case run apart under its own label gives every variable of it
+    bit for bit (the sinusoid's frequency included). Under the rate effect (real time) f
+    acts: two keys (its cycles last 1/f: the rate test above)."""
+    asm, config, folder = setup
+    paths = [_conditions(folder, f"qs{f:g}", frequency_Hz=f) for f in (5.0, 60.0)]
+    ev = Evaluator([], [asm], [(p, [1.0, 2.0]) for p in paths], config, 2, "axial_strain", folder / "qs")
+    at = ev(np.zeros((1, 0)))[0]
+    (files,) = [st["cases"] for st in ev.sets]
+    assert files[0] == files[1] and len(list((folder / "qs" / "cases").glob("*/case0.nc"))) == 1
+    assert np.array_equal(at[:, :2], at[:, 2:])
+    shared = open_netcdf(files[0][0], "metrics")
+    assert shared.attrs["measured_conditions_file"] == str(paths[0])
+    apart = open_netcdf(runner.run_case(ev.scenarios({})[1], 0, folder / "qs60" / "case0.nc"), "metrics")
+    assert apart.attrs["measured_conditions_file"] == str(paths[1]) and not apart.attrs["failed"]
+    assert "loading_frequency" in apart and apart.sizes["cycle"] == 2
+    for name, var in apart.data_vars.items():
+        assert np.array_equal(var.values, shared[name].values, equal_nan=var.dtype.kind == "f"), name
+    rate = Evaluator(["contact_damping_ratio"], [asm], [(p, [1.0]) for p in paths], config, 2, "axial_strain",
+                     folder / "qs", effect="rate")
+    assert len({s.key for s in rate.scenarios({"contact_damping_ratio": 0.3})}) == 2
+
+
 @pytest.mark.parametrize("name", sorted(EFFECTS))
 def test_check_rejects_bad_values_naming_the_modifier(name):
     effect = MODIFIERS[name]

@@ -84,3 +84,11 @@ class LoopRun:
         sets = (1 + (self.plain.probe is not None)
                 + sum(len(c.evaluate.sets) for c in self.selection.candidates.values()))
         return self.cases * len(self.targets.points) * sets
+
+    @property
+    def dem_runs(self):
+        """Distinct case files behind them: cases of one scenario key are one run (tests
+        that differ only in what does not act, a quasi-static test's f)."""
+        sets = [self.plain.runs, *([self.plain.probe] if self.plain.probe else []),
+                *(st for c in self.selection.candidates.values() for st in c.evaluate.sets)]
+        return len({str(f) for st in sets for per_test in st["cases"] for f in per_test})

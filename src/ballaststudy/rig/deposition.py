@@ -71,6 +71,11 @@ class DepositionParams:
     def to_dict(self):
         return asdict(self)
 
+    def inert_keys(self):
+        """The parameters that do not act on a run under the others' values (a cache key
+        leaves them out, so runs that differ only in them are one run): none here."""
+        return ()
+
 
 def choose_stones(lib, area, rng):
     """Library indices drawn with replacement until their ball area reaches ``area``."""

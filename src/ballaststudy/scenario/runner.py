@@ -102,9 +102,14 @@ def check_backend(backend):
 
 
 def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu"):
-    """Every (scenario, k, out) in ``cases``: ``jobs`` processes at a time (cpu), or every
-    unfinished case in GPU batches, one per contact law (cuda)."""
+    """Every (scenario, k, out) in ``cases``, each ``out`` once (scenarios of one key share
+    their cases): ``jobs`` processes at a time (cpu), or every unfinished case in GPU
+    batches, one per contact law (cuda)."""
     check_backend(backend)
+    unique = {}
+    for case in cases:
+        unique.setdefault(str(case[2]), case)
+    cases = list(unique.values())
     bar = tqdm(total=len(cases), desc=desc, unit="case", disable=not progress)
     if backend == "cuda":
         _run_on_gpu(cases, bar)

@@ -6,11 +6,15 @@ their metrics files; the runner (runner.py) turns (scenario, specimen) into one.
 
 Its ``key`` is the cache key of its cases: a hash of everything that decides them - the
 specimens' content (sha-256 of their files, not their names: specimens re-assembled under
-the same names must not reuse old cases), the rig's parameters, the modifiers in the order
-they are applied with their values (12 significant digits), the covariates a modifier may
-read, the cycles, the metrics settings, a chaos probe's perturbation when there is one, and the
-stress mapping's kind and ratio when one is applied (mapping.py; the bounds it set are in the
-rig's parameters already). File names and the conditions file are labels, not part of the key."""
+the same names must not reuse old cases), the rig's parameters as the run sees them (the
+modifiers' rig settings applied) but those inert under the others (``inert_keys``: a
+quasi-static test's frequency), the modifiers in the order they are applied with their
+values (12 significant digits), the covariates its modifiers read, the cycles, the metrics
+settings, a chaos probe's perturbation when there is one, and the stress mapping's kind and
+ratio when one is applied (mapping.py; the bounds it set are in the rig's parameters
+already). File names and the conditions file are labels, not part of the key: scenarios of
+one key are one run (the loop's quasi-static sets under Sun et al.'s frequency series: one
+case for six tests), and its case file carries the first one's labels."""
 import hashlib
 import json
 from dataclasses import dataclass
@@ -85,6 +89,19 @@ class Scenario:
         return {k: v for name, values in self.modifiers if MODIFIERS[name].role == "material"
                 for k, v in values}
 
+    def deciding_rig(self):
+        """{parameter: value} of the rig as the run sees it (the modifiers' rig settings
+        applied), its inert parameters left out."""
+        params = self.rig
+        for name, _ in self.modifiers:
+            MODIFIERS[name].set_rig(params)
+        return {k: v for k, v in params.to_dict().items() if k not in params.inert_keys()}
+
+    def read_covariates(self):
+        """The declared covariates its modifiers read (the others act on nothing)."""
+        read = {MODIFIERS[name].covariate for name, _ in self.modifiers}
+        return {k: v for k, v in self.covariates.items() if k in read}
+
     @property
     def key(self):
         probe = ({"perturbation_m_s": self.perturbation_m_s, "perturbation_seed": self.perturbation_seed}
@@ -92,9 +109,9 @@ class Scenario:
         mapped = key_of(self.mapping)
         probe.update({"stress_mapping": mapped} if mapped else {})
         text = _canonical({"kind": self.kind, "specimens": list(self.specimen_hashes),
-                           "rig": json.loads(self.rig_json), "cycles": self.cycles,
+                           "rig": self.deciding_rig(), "cycles": self.cycles,
                            "modifiers": [[n, _rounded(dict(v))] for n, v in self.modifiers],
-                           "covariates": self.covariates, "metrics": self.metrics, **probe})
+                           "covariates": self.read_covariates(), "metrics": self.metrics, **probe})
         return hashlib.sha1(text.encode()).hexdigest()[:12]
 
 

@@ -70,6 +70,13 @@ class BiaxialParams(DepositionParams):
         """q_max - q_min [Pa]."""
         return (self.deviator_max_kPa - self.deviator_min_kPa) * KPA
 
+    def inert_keys(self):
+        """Quasi-static: the test's frequency. The sinusoid starts at cycle 0's trough at
+        the bounds' frequency, set from the compliance of the first loading branch (always
+        measured: it moves the stress from p to p + q_max), so f never acts
+        (tests/scenario/test_modifiers.py runs a case at two f: the same bytes)."""
+        return ("frequency_Hz",) if self.mode == "quasi_static" else ()
+
     def take_conditions(self, c):
         """A measured test's loading conditions (``measured.importer.load_conditions``):
         p, the q bounds, f."""

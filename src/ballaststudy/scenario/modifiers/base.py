@@ -44,6 +44,8 @@ class Modifier:
                                         # "effect": a mechanism the loop may add
     needs_rolling: bool = False         # sets a rolling coefficient: the rig must be assembled
                                         # with the law's rolling sub-model (rolling_resistance)
+    rig_settings: tuple = ()            # ((rig parameter, value), ...) it sets whatever its
+                                        # values, before ``configure`` (what a cache key sees)
 
     def testable(self, conditions_list):
         """Whether the tests can show it: one that acts only through a covariate needs a
@@ -70,8 +72,14 @@ class Modifier:
         """Set it with ``values`` on an assembled (not yet loaded) rig under a test's
         declared covariates."""
         self.check(values)
+        self.set_rig(rig.params)
         if self.configure:
             self.configure(rig, values, covariates or {})
+
+    def set_rig(self, params):
+        """Its ``rig_settings`` on rig parameters (the params object, changed in place)."""
+        for name, value in self.rig_settings:
+            setattr(params, name, value)
 
 
 # covariates a modifier reads: (units, lowest, highest)

@@ -7,9 +7,7 @@ from ...dem.materials import STONE_MATERIALS
 from .base import Modifier, ModifierParameter
 
 
-
 def configure(rig, values, covariates):
-    rig.params.mode = "real_time"           # frequency_Hz: the test's (take_conditions)
     sim = rig.sim
     sim.set_damping(0.0)
     for a in STONE_MATERIALS:
@@ -22,4 +20,4 @@ MODIFIER = Modifier(
     "at the stone contacts, no local damping",
     (ModifierParameter("contact_damping_ratio", "normal dashpot damping ratio of the stone contacts",
                      "1", 0.05, 0.7),),
-    configure)
+    configure, rig_settings=(("mode", "real_time"),))     # at the test's f (take_conditions)
