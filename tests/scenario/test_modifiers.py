@@ -235,6 +235,51 @@ def test_a_quasi_static_case_is_one_run_whatever_the_tests_frequency(setup):
     assert len({s.key for s in rate.scenarios({"contact_damping_ratio": 0.3})}) == 2
 
 
+@pytest.mark.parametrize("failure_axial_strain", [0.15, 5e-6])
+def test_abrasion_starts_from_the_plain_runs_first_loading(setup, monkeypatch, tmp_path, failure_axial_strain):
+    """Abrasion acts from cycle 0's end (a hook only): with the first loading shared, its
+    cases start from the state the plain case kept there, no first loading of their own,
+    its hook called for cycle 0 there; every variable and the joint strengths at every
+    cycle's end equal its run made apart, bit for bit - the plain case's too (its state
+    saved on the way). At a failure strain of 5e-6 (its first loading reaches 2e-5) the specimen gives way in its first
+    loading: the abrasion case is that failure, not a resumed loading."""
+    asm, config, folder = setup
+    cfg = yaml.safe_load(config.read_text())
+    cfg["rig"]["biaxial"]["loading"]["failure_axial_strain"] = failure_axial_strain
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    cond = [(_conditions(tmp_path, "wear"), [1.0, 2.0, 3.0])]
+    base = {"F_str_co": 1.0}
+    make = lambda share, **kw: Evaluator(kw.pop("names", []), [asm], cond, config, 3, "axial_strain",
+                                         tmp_path / "s", base=base, share_first_loading=share, **kw)
+    plain, worn = make(True), make(True, names=["wear_per_cycle"], effect="abrasion")
+    plain(np.zeros((1, 0)))
+    (sc,) = plain.scenarios({})
+    assert runner.first_loaded(tmp_path / "s" / "cases", sc, 0).is_file()
+    fresh, real_fresh, real_hooks, strengths = [], runner.fresh_run, runner._hooks, []
+    monkeypatch.setattr(runner, "fresh_run", lambda *a, **kw: fresh.append(a[0]) or real_fresh(*a, **kw))
+    monkeypatch.setattr(runner, "_hooks", lambda s: real_hooks(s) + [      # joint strengths at cycle ends
+        lambda run, cycle: strengths.append((cycle, run.rig.sim.bonds.sigc.copy()))])
+    worn(np.array([[0.05]]))
+    assert fresh == []                                      # no first loading of its own
+    shared_strengths, strengths[:] = list(strengths), []
+    (wsc,) = worn.scenarios({"wear_per_cycle": 0.05})
+    assert runner.without_hook_only(wsc).key == sc.key
+    for shared, scenario in ((worn.sets[0]["cases"][0][0], wsc), (plain.sets[0]["cases"][0][0], sc)):
+        apart = runner.run_case(scenario, 0, tmp_path / "apart" / scenario.key / "case0.nc")
+        a, b = open_netcdf(shared, "metrics"), open_netcdf(apart, "metrics")
+        assert a.attrs["failed"] == b.attrs["failed"] == int(failure_axial_strain < 0.01)
+        assert a.sizes["cycle"] == (0 if a.attrs["failed"] else 3) and set(a.data_vars) == set(b.data_vars)
+        for name, var in a.data_vars.items():
+            assert np.array_equal(var.values, b[name].values, equal_nan=var.dtype.kind == "f"), name
+    cycles = [] if a.attrs["failed"] else [0, 1, 2]
+    assert [c for c, _ in shared_strengths] == cycles and [c for c, _ in strengths[:len(cycles)]] == cycles
+    for (_, x), (_, y) in zip(shared_strengths, strengths):
+        assert np.array_equal(x, y)
+    if cycles:                                              # the wear acted from cycle 0 on
+        assert np.all(shared_strengths[0][1] <= strengths[-1][1]) and np.any(shared_strengths[0][1] < strengths[-1][1])
+
+
 @pytest.mark.parametrize("name", sorted(EFFECTS))
 def test_check_rejects_bad_values_naming_the_modifier(name):
     effect = MODIFIERS[name]

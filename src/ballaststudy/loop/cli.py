@@ -194,7 +194,7 @@ def _loop(args):
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
                          progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s,
-                         backend=args.backend, mapping=mapping)
+                         backend=args.backend, mapping=mapping, share_first_loading=True)
 
     plain_eval = make([])
     plain_at = plain_eval(np.zeros((1, 0)))[0]

@@ -32,6 +32,8 @@ class CycleState:
     n_bonds0: int = 0                # bonds intact when loading began
     rows: list = field(default_factory=list)           # behaviours per cycle
     metrics_cfg: dict = field(default_factory=dict)
+    failure: str = ""                # why the run stopped before its cycles ("" = it did not:
+                                     # a specimen that failed, set by the rig)
 
 
 class CyclicRun:
@@ -202,7 +204,8 @@ class CyclicRun:
         except (KeyError, TypeError, ValueError) as err:   # ValueError: JSON or engine bytes
             raise ConfigError(path, None, f"not a checkpoint of this version ({err}); "
                               "run again with --restart") from None
-        if run.s.phase == "done" and run.s.cycle < run.cycles:
-            run.s.phase = "cyclic"      # more cycles asked for than were run
+        if run.s.phase == "done" and not run.s.failure and run.s.cycle < run.cycles:
+            run.s.phase = "cyclic"      # more cycles asked for than were run (a failed
+                                        # specimen stays failed)
             run._start_cycle()
         return run

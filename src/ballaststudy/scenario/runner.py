@@ -4,10 +4,17 @@ chaos probe's perturbation), then runs the cycles; a case with a checkpoint besi
 output resumes from it (the modifiers' effects live in the checkpointed state, only their
 end-of-cycle hooks are attached again). ``run_cases`` runs many in parallel processes, or
 all at once as one GPU batch (backend ``cuda``: rig.batched), and skips finished ones, so
-an interrupted calibration or loop resumes."""
+an interrupted calibration or loop resumes.
+
+Given a cache folder to share the first loading in (``shared``), a case keeps its state at
+the end of cycle 0 beside its file, and a scenario with hook-only modifiers (abrasion: they
+first act at cycle 0's end) starts from that state of the scenario without them - run once
+for all their values, where a specimen that gives way in its first loading costs most -
+with their hooks for the cycles it ended: the same bytes as a run of its own."""
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import replace
 from pathlib import Path
 
 from tqdm import tqdm
@@ -29,6 +36,19 @@ def cached_case(root, scenario, k):
 
 def checkpoint_of(out):
     return Path(out).with_name(Path(out).stem + ".checkpoint.npz")
+
+
+def first_loaded(root, scenario, k):
+    """Where case ``k`` of a scenario keeps its state at the end of cycle 0 (or where its
+    specimen gave way before): beside its case file."""
+    return cached_case(root, scenario, k).with_suffix(".first_loaded.npz")
+
+
+def without_hook_only(scenario):
+    """The scenario without its hook-only modifiers (its run up to the end of cycle 0);
+    None when it has none."""
+    kept = tuple((n, v) for n, v in scenario.modifiers if not MODIFIERS[n].hook_only)
+    return replace(scenario, modifiers=kept) if len(kept) < len(scenario.modifiers) else None
 
 
 def _hooks(scenario):
@@ -65,6 +85,26 @@ def prepared_run(scenario, k, out, checkpoint_every=None, restart=False):
     return run, resumed
 
 
+def _from_first_loading(prefix, scenario, k, out, shared):
+    """Case ``k`` of ``scenario`` from the state of ``prefix`` (without_hook_only) at the
+    end of cycle 0 (run here if no case has kept it), its hooks called for the cycles that
+    state ended, then attached; it checkpoints beside ``out``."""
+    state = first_loaded(shared, prefix, k)
+    if not state.is_file():
+        run = fresh_run(prefix, k, None)
+        run.run(stop_after=1)
+        state.parent.mkdir(parents=True, exist_ok=True)
+        run.save_checkpoint(state)
+    run = rig_classes(scenario.kind)[1].from_checkpoint(state, cycles=scenario.cycles)
+    run.checkpoint = checkpoint_of(out)
+    hooks = _hooks(scenario)
+    for cycle in range(run.s.cycle):
+        for hook in hooks:
+            hook(run, cycle)
+    run.hooks += hooks
+    return run
+
+
 def write_case(run, scenario, k, out, figures=False, attrs=None):
     """The metrics file of a finished run, saying what made it."""
     write_outputs = rig_classes(scenario.kind)[2]
@@ -78,14 +118,22 @@ def write_case(run, scenario, k, out, figures=False, attrs=None):
         **(attrs or {})})
 
 
-def run_case(scenario, k, out):
-    """Case ``k`` of ``scenario`` into ``out`` (resuming; a finished one is kept). Returns out."""
+def run_case(scenario, k, out, shared=None):
+    """Case ``k`` of ``scenario`` into ``out`` (resuming; a finished one is kept), sharing
+    the first loading in the cache folder ``shared`` (None: not). Returns out."""
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     out = Path(out)
     if out.is_file():
         return str(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    run, _ = prepared_run(scenario, k, out)
+    prefix = without_hook_only(scenario) if shared else None
+    if prefix and not checkpoint_of(out).is_file():
+        run = _from_first_loading(prefix, scenario, k, out, shared)
+    else:
+        run, resumed = prepared_run(scenario, k, out)
+        if shared and not resumed:
+            run.run(stop_after=1)
+            run.save_checkpoint(first_loaded(shared, scenario, k))
     run.run()
     write_case(run, scenario, k, out)
     checkpoint_of(out).unlink(missing_ok=True)
@@ -101,10 +149,11 @@ def check_backend(backend):
                           "(a machine with one, and pip install -e '.[cuda]'), or use cpu")
 
 
-def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu"):
+def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared=None):
     """Every (scenario, k, out) in ``cases``, each ``out`` once (scenarios of one key share
-    their cases): ``jobs`` processes at a time (cpu), or every unfinished case in GPU
-    batches, one per contact law (cuda)."""
+    their cases): ``jobs`` processes at a time (cpu; sharing the first loading in the
+    cache folder ``shared``, see above), or every unfinished case in GPU batches, one per
+    contact law (cuda)."""
     check_backend(backend)
     unique = {}
     for case in cases:
@@ -115,12 +164,12 @@ def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu"):
         _run_on_gpu(cases, bar)
     elif jobs > 1 and len(cases) > 1:
         with ProcessPoolExecutor(jobs) as pool:
-            for done in as_completed([pool.submit(run_case, *c) for c in cases]):
+            for done in as_completed([pool.submit(run_case, *c, shared) for c in cases]):
                 done.result()
                 bar.update()
     else:
         for c in cases:
-            run_case(*c)
+            run_case(*c, shared)
             bar.update()
     bar.close()
 

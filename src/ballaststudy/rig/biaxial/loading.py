@@ -111,7 +111,6 @@ class BiaxialState(CycleState):
                                       # and unloading branch (0: none yet)
     half_sample0: int = -1            # the sample where this half cycle began
     prev_half_sample0: int = -1       # ... and where the one before it began
-    failure: str = ""                 # why the specimen failed ("" = it did not)
     unloading_frequency: float = 0.0  # the sinusoid's, in this cycle's unloading
     peak_stress: float = 0.0          # q's largest window mean [Pa] in this loading branch and
     peak_strain: float = float("nan")  # the axial strain at the window's centre (peak.py)
@@ -500,7 +499,10 @@ class BiaxialRun(CyclicRun):
         return np.convolve(sig, np.ones(n) / n, mode="valid")
 
     def on_cycle_end(self):
-        if self.s.cycle % self.checkpoint_every == 0:
+        """The solids are rebuilt wherever a run may start from a saved state, so that it
+        rounds as the run that went on: at its checkpoints and at the end of the first
+        loading (scenario.runner: hook-only effects start there)."""
+        if self.s.cycle % self.checkpoint_every == 0 or self.s.cycle == 1:
             self.solid_cache.clear()
 
     def _thin_samples(self, k0, every=None):

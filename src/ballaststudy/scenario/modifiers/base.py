@@ -47,6 +47,12 @@ class Modifier:
     rig_settings: tuple = ()            # ((rig parameter, value), ...) it sets whatever its
                                         # values, before ``configure`` (what a cache key sees)
 
+    @property
+    def hook_only(self):
+        """Acts only through its end-of-cycle hooks: a run is the run without it up to
+        the end of the first loading (cycle 0), where its hook first acts."""
+        return self.hook is not None and self.configure is None and not self.rig_settings
+
     def testable(self, conditions_list):
         """Whether the tests can show it: one that acts only through a covariate needs a
         test declaring it nonzero (its runs would equal the plain model's)."""
