@@ -238,11 +238,12 @@ def test_a_quasi_static_case_is_one_run_whatever_the_tests_frequency(setup):
 @pytest.mark.parametrize("failure_axial_strain", [0.15, 5e-6])
 def test_abrasion_starts_from_the_plain_runs_first_loading(setup, monkeypatch, tmp_path, failure_axial_strain):
     """Abrasion acts from cycle 0's end (a hook only): with the first loading shared, its
-    cases start from the state the plain case kept there, no first loading of their own,
-    its hook called for cycle 0 there; every variable and the joint strengths at every
-    cycle's end equal its run made apart, bit for bit - the plain case's too (its state
-    saved on the way). At a failure strain of 5e-6 (its first loading reaches 2e-5) the specimen gives way in its first
-    loading: the abrasion case is that failure, not a resumed loading."""
+    cases start from the state the plain case kept there (they keep none), no first
+    loading of their own, its hook called for cycle 0 there; every variable and the joint
+    strengths at every cycle's end equal its run made apart, bit for bit - the plain
+    case's too (its state saved on the way). At a failure strain of 5e-6 (the first
+    loading reaches 2e-5) the specimen gives way in its first loading: the abrasion case
+    is that failure, not a resumed loading."""
     asm, config, folder = setup
     cfg = yaml.safe_load(config.read_text())
     cfg["rig"]["biaxial"]["loading"]["failure_axial_strain"] = failure_axial_strain
@@ -265,6 +266,7 @@ def test_abrasion_starts_from_the_plain_runs_first_loading(setup, monkeypatch, t
     shared_strengths, strengths[:] = list(strengths), []
     (wsc,) = worn.scenarios({"wear_per_cycle": 0.05})
     assert runner.without_hook_only(wsc).key == sc.key
+    assert not runner.first_loaded(tmp_path / "s" / "cases", wsc, 0).exists()   # the plain model's only
     for shared, scenario in ((worn.sets[0]["cases"][0][0], wsc), (plain.sets[0]["cases"][0][0], sc)):
         apart = runner.run_case(scenario, 0, tmp_path / "apart" / scenario.key / "case0.nc")
         a, b = open_netcdf(shared, "metrics"), open_netcdf(apart, "metrics")

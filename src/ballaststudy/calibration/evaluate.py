@@ -35,9 +35,9 @@ class Evaluator:
         by that much (Simulation.perturb_velocities, seeded by ``perturbation_seed`` + the
         case index): the chaos probe of loop.select. ``backend``: run_cases' (cpu, cuda).
         ``mapping``: the stress mapping of the tests' q onto the specimens (scenario.mapping;
-        None: none), the same for every set. ``share_first_loading``: every case keeps its
-        state after cycle 0 in the cache, and a set of a hook-only effect (abrasion) starts
-        there (scenario.runner; the loop, whose plain set runs first)."""
+        None: none), the same for every set. ``share_first_loading``: the plain model's cases keep
+        their state after cycle 0 in the cache, and a set of a hook-only effect (abrasion)
+        starts there (scenario.runner; the loop, whose plain set runs first)."""
         self.names, self.specimens = list(names), [str(s) for s in specimens]
         self.cycles, self.quantity = int(cycles), quantity
         self.cache, self.jobs, self.progress = Path(out_dir) / "cases", int(jobs), progress
