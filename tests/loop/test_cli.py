@@ -102,6 +102,7 @@ def test_loop_end_to_end(tiny, tmp_path):
     # K x runs x (plain + 2 design + 2 refined sets): t0 and t1 differ in f only, one run
     # quasi-static (the scenario key leaves f out), so 2 runs for the 3 tests
     assert len(cached) == 2 * 2 * (1 + 2 + 2)
+    assert not list((out / "cases").rglob("*.first_loaded.npz"))     # no hook-only candidate: none kept
     assert "at 2 parameter sets each + 1 x 2 refined around the held-out posteriors" in text
     stamp = [p.stat().st_mtime_ns for p in cached]
     assert main(_argv(tiny, out)) == 0                   # again: every case reused (no law: nothing extrapolated)

@@ -189,12 +189,14 @@ def _loop(args):
                         seed=cfg["seed"])
     mapping = stage_mapping(cfg, args.config, args.strength_envelope, "biaxial")
     t0 = time.time()
+    # the plain cases keep their first-loaded state only for a hook-only candidate (abrasion)
+    share = any(MODIFIERS[e].hook_only for e in lp["effects"])
 
     def make(names, effect=None, perturbation_m_s=0.0):
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
                          progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s,
-                         backend=args.backend, mapping=mapping, share_first_loading=True)
+                         backend=args.backend, mapping=mapping, share_first_loading=share)
 
     plain_eval = make([])
     plain_at = plain_eval(np.zeros((1, 0)))[0]
