@@ -4,13 +4,22 @@ form database reused by several test files (generated once per session).
 The GPU batch (dem/gpu) runs here under numba's CUDA simulator (CI has no GPU): it is
 switched on before anything imports numba.cuda, which the package does wherever the
 scenario runner is imported (its cuda backend), so here, before any test module. On a
-machine with a GPU, BALLASTSTUDY_TEST_GPU=real runs the same tests on it instead."""
+machine with a GPU, BALLASTSTUDY_TEST_GPU=real runs the same tests on it instead.
+
+xdist runs one worker per core, so BLAS and OpenMP threads within a worker only contend
+for the cores: they are one per worker (set before numpy loads, inherited by the workers
+and by the programs tests start). With OpenBLAS's default two per worker, the loop's
+Gaussian-process fits ran 4-5 x slower while the other core was busy (bench/blas_threads.py:
+17.6 and 15.8 s against 3.7 and 3.1 s, 2026-11-29)."""
 import copy
 import os
 
-import numba
-import pytest
-import xarray as xr
+for _threads in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_threads, "1")
+
+import numba  # noqa: E402
+import pytest  # noqa: E402
+import xarray as xr  # noqa: E402
 
 if os.environ.get("BALLASTSTUDY_TEST_GPU") != "real":
     os.environ["NUMBA_ENABLE_CUDASIM"] = "1"

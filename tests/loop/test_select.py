@@ -11,7 +11,7 @@ import pytest
 
 from ballaststudy.calibration.bayes import initial_design
 from ballaststudy.calibration.bayes import SHRINK
-from ballaststudy.loop.select import (ALPHA, chaos_covariance, choose, fit_all, held_out_candidate, held_out_plain,
+from ballaststudy.loop.select import (ALPHA, chaos_covariance, choose, held_out_candidate, held_out_plain, judge_candidate,
                                       residual_covariances, residual_dof, scatter_mse)
 
 TESTS = 7
@@ -50,8 +50,8 @@ def _specimens(rng, n, point_test, effect, theta, k, offsets=None, chaos=2e-4):
 def _judged(thetas, runs, plain_curves, measured, point_test, noise, dof):
     """The loop's judgement (loop.cli._judge) of every candidate against the plain model."""
     covs, plain_covs = noise
-    held = {k: held_out_candidate(thetas, c, measured, point_test, [0.0], [1.0], covs, dof=dof) for k, c in runs.items()}
-    fits = {k: fit_all(thetas, c, measured, point_test, [0.0], [1.0], covs, dof=dof) for k, c in runs.items()}
+    judged = {k: judge_candidate(thetas, c, measured, point_test, [0.0], [1.0], covs, dof=dof) for k, c in runs.items()}
+    held, fits = ({k: j[i] for k, j in judged.items()} for i in (0, 1))
     plain = held_out_plain(plain_curves, measured, point_test, plain_covs, dof)
     chosen, evidence = choose({k: (held[k], plain) for k in runs}, measured, scatter_mse(plain_covs))
     return chosen, evidence, held, plain, fits
