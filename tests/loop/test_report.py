@@ -77,9 +77,11 @@ def _chosen_run():
     """A run of K = 2 cases, 3 cycles, two tests, the end_restraint effect chosen."""
     rng = np.random.default_rng(0)
     runs = lambda name, shared=False: [[f"{name}{'' if shared else j}/case{k}.nc" for k in range(2)] for j in range(2)]
-    plain = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("plain", shared=True))
-    after = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("after"))
-    design = [dict(curves=rng.random((2, 2, 3)), cases=runs(f"design{i}")) for i in range(2)]
+    plain = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("plain", shared=True),
+                 first_loadings=["plain"] * 2)
+    after = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("after"), first_loadings=["a0", "a1"])
+    design = [dict(curves=rng.random((2, 2, 3)), cases=runs(f"design{i}"), first_loadings=[f"d{i}"] * 2)
+              for i in range(2)]          # (their tests differ only in what cycle 0 does not read)
     held = HeldOut(np.array([1.0, 2.0]), TARGETS.y + 1e-4, np.zeros((2, 1)))
     candidate = Candidate(np.array([[0.0], [1.2]]), [], held, (np.array([0.3]), np.array([[0.2, 0.4]]), 100.0),
                           SimpleNamespace(sets=design + [after]))
@@ -99,6 +101,7 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     run, stats = _chosen_run()
     assert run.dem_cases == 2 * 2 * (1 + 3)                     # plain + 2 design sets + the fitted run
     assert run.dem_runs == 2 * (1 + 2 * 3)              # the plain model's tests share their runs
+    assert run.dem_first_loadings == 2 * (1 + 2 + 1 + 1)    # the design sets' tests their cycle 0
     assert stats.after_rmse == pytest.approx(1e-4) and stats.chosen_row["effect"] == "end_restraint"
     assert stats.candidates[0]["held_out_rmse"] == pytest.approx(1e-4)
     assert chosen_doc(stats, {}) == {"effect": "end_restraint", "parameters": {"platen_friction": 0.3},
@@ -113,7 +116,7 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     text = report_markdown(run, stats)
     assert "Stress mapping: **none**" in text
     assert "likelihood: multivariate t with dof = 1 (K - 1:" in text
-    assert "16 DEM cases, 14 runs (" in text and "; 0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
+    assert "16 DEM cases, 14 runs from 10 first loadings (" in text and "; 0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
     assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] |" in text
     assert "| 0.01 | 2 | chosen |" in text                   # held-out RMSE, cut / scatter sqrt(4), verdict
     assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text

@@ -302,3 +302,71 @@ def test_check_rejects_bad_values_naming_the_modifier(name):
 def test_fouling_refuses_a_vci_it_cannot_read(cov):
     with pytest.raises(ValueError, match="covariate VCI"):
         covariate({"VCI": cov}, "VCI")
+
+
+@pytest.mark.parametrize("load_control, failure_axial_strain",
+                         [("applied_force", 0.15), ("servo", 0.15), ("applied_force", 5e-6)])
+def test_a_real_time_tests_frequencies_share_one_cycle_0(setup, monkeypatch, tmp_path, load_control,
+                                                          failure_axial_strain):
+    """Under the rate effect (real time) f acts from the first trough on, not in cycle 0
+    (BiaxialParams.first_cycle_inert_keys): two tests that differ only in f are two keys of
+    one first_cycle_key; run_cases runs their cycle 0 once (one fresh run), each goes on
+    from that state under its own f, and every variable equals its case run apart, bit for
+    bit (under either load control; the servo's speed limit, set by f here, binds
+    nowhere in these cycles: the test below checks it); the 40 Hz
+    case's cycles last half the 20 Hz one's; no state is left. Where the
+    specimen gives way in its first loading (failure strain 5e-6) the two cases are that
+    failure."""
+    asm, config, folder = setup
+    cfg = yaml.safe_load(config.read_text())
+    cfg["rig"]["biaxial"]["loading"].update(failure_axial_strain=failure_axial_strain, load_control=load_control,
+                                            sine_velocity_min_m_s=1e-6)   # the servo's limit 2 pi f C dq
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    cond = [(_conditions(tmp_path, f"rt{f}", frequency_Hz=f), [1.0, 2.0, 3.0]) for f in (20.0, 40.0)]
+    ev = Evaluator(["contact_damping_ratio"], [asm], cond, config, 3, "axial_strain", tmp_path / "s", effect="rate")
+    scenarios = ev.scenarios({"contact_damping_ratio": 0.3})
+    assert scenarios[0].key != scenarios[1].key and scenarios[0].first_cycle_key == scenarios[1].first_cycle_key
+    fresh, real_fresh = [], runner.fresh_run
+    monkeypatch.setattr(runner, "fresh_run", lambda *a, **kw: fresh.append(a[0].key) or real_fresh(*a, **kw))
+    ev(np.array([[0.3]]))
+    assert len(fresh) == 1                                  # one cycle 0 for both
+    assert not list((tmp_path / "s" / "cases").glob("*.first_cycle/*.npz"))
+    shared = [open_netcdf(ev.sets[0]["cases"][t][0], "metrics") for t in range(2)]
+    for scenario, a in zip(scenarios, shared):
+        b = open_netcdf(runner.run_case(scenario, 0, tmp_path / "apart" / scenario.key / "case0.nc"), "metrics")
+        assert a.attrs["failed"] == b.attrs["failed"] == int(failure_axial_strain < 0.01)
+        assert a.attrs["rig_params_json"] == b.attrs["rig_params_json"] and set(a.data_vars) == set(b.data_vars)
+        for name, var in a.data_vars.items():
+            assert np.array_equal(var.values, b[name].values, equal_nan=var.dtype.kind == "f"), name
+    if not shared[0].attrs["failed"]:
+        assert shared[0].sizes["cycle"] == 3
+        ratio = shared[0]["cycle_steps"].values[1:] / shared[1]["cycle_steps"].values[1:]
+        assert np.all(np.abs(ratio - 2.0) < 0.2), ratio
+
+
+def test_continue_under_sets_what_the_first_trough_set_from_f(setup, tmp_path):
+    """A state at the end of cycle 0 made at 40 Hz, gone on under 20 Hz
+    (BiaxialRun.continue_under), equals the 20 Hz run stopped there in everything: engine,
+    every controller's settings (the sinusoid's frequency, its servo's speed limit 2 pi f C
+    dq: not binding in the short run above, so checked here), run state, parameters."""
+    asm, config, folder = setup
+    cfg = yaml.safe_load(config.read_text())
+    cfg["rig"]["biaxial"]["loading"].update(load_control="servo", sine_velocity_min_m_s=1e-6)
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    cond = [(_conditions(tmp_path, f"rt{f}", frequency_Hz=f), [1.0]) for f in (20.0, 40.0)]
+    ev = Evaluator(["contact_damping_ratio"], [asm], cond, config, 2, "axial_strain", tmp_path / "s", effect="rate")
+    at20, at40 = ev.scenarios({"contact_damping_ratio": 0.3})
+    runner.run_first_cycle(at40, 0, tmp_path / "40.npz")
+    runner.run_first_cycle(at20, 0, tmp_path / "20.npz")
+    gone_on = runner._from_first_cycle(at20, 0, tmp_path / "out" / "case0.nc", tmp_path / "40.npz")
+    own = BiaxialRun.from_checkpoint(tmp_path / "20.npz", cycles=2)
+    as_made = BiaxialRun.from_checkpoint(tmp_path / "40.npz", cycles=2)
+    assert gone_on.s.cycle == 1 and gone_on.rig.params == own.rig.params != as_made.rig.params
+    assert gone_on.rig.engine_bytes() == own.rig.engine_bytes() and gone_on.s == own.s
+    mine, theirs, before = gone_on.control.to_dict(), own.control.to_dict(), as_made.control.to_dict()
+    assert mine.keys() == theirs.keys()
+    for name in mine:
+        assert np.array_equal(mine[name], theirs[name]), name
+    assert any(not np.array_equal(before[name], theirs[name]) for name in mine)   # 40 Hz's differ

@@ -15,7 +15,7 @@ from ..measured.importer import load_conditions, measured_test_name
 from ..rig.kinds import kind_of
 from ..scenario.modifiers import material_modifiers
 from ..scenario.results import at_points, case_curve
-from ..scenario.runner import cached_case, run_cases
+from ..scenario.runner import cached_case, run_cases, without_hook_only
 from ..scenario.scenario import conditioned_rig, scenario
 
 
@@ -76,6 +76,11 @@ class Evaluator:
         """{test (source/name): its stress mapping's record}."""
         return {measured_test_name(t["conditions"]): t["mapping"] for t in self.tests}
 
+    def _first_loading(self, scenario):
+        """The first_cycle_key of the cycle 0 a scenario's cases go on from (run_cases: a
+        real-time test's f apart; sharing the first loading, its hook-only modifiers apart)."""
+        return ((self.shared and without_hook_only(scenario)) or scenario).first_cycle_key
+
     def __call__(self, thetas):
         batch = [dict(zip(self.names, map(float, t))) for t in np.atleast_2d(thetas)]
         per_set = [self.scenarios(v) for v in batch]
@@ -90,7 +95,8 @@ class Evaluator:
             curves = np.array([[c for c, _ in r] for r in read])              # (T, K, cycles)
             at = np.concatenate([[at_points(c, t["points"]) for c in curves[j]]
                                  for j, t in enumerate(self.tests)], axis=1)       # (K, P)
-            self.sets.append(dict(values=values, keys=[s.key for s in scs], cases=f, curves=curves,
+            self.sets.append(dict(values=values, keys=[s.key for s in scs], first_loadings=[
+                                      self._first_loading(s) for s in scs], cases=f, curves=curves,
                                   at_points=at, failed=[[fl for _, fl in r] for r in read]))
             out.append(at)
         return out

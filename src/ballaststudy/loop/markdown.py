@@ -33,9 +33,11 @@ def _opening(run, stats, unit):
             f"{len(stats.before)} tests, {lp['cases']} specimens per model and test, {lp['cycles']} simulated cycles "
             f"(the DEM horizon); {len(stats.candidates)} candidate effects at {lp['design_sets']} parameter sets each"
             f"{refined}; "
-            f"{run.dem_cases} DEM cases, {run.dem_runs} runs (a case that differs from another only in what "
-            f"does not act, a quasi-static test's f, is the other's run; {run.minutes:.1f} min in this run; cases "
-            "found in the cache are not rerun). "
+            f"{run.dem_cases} DEM cases, {run.dem_runs} runs from {run.dem_first_loadings} first loadings (a case "
+            "that differs from another only in what does not act, a quasi-static test's f, is the other's run; "
+            "one that differs only in what the first loading does not read, a real-time test's f, or in "
+            "effects that act from its end, abrasion, goes on from the other's first loading; "
+            f"{run.minutes:.1f} min in this run; cases found in the cache are not rerun). "
             f"Quantity: {q} [{unit}].", "", mapping_markdown(run.mapping or {})]
 
 

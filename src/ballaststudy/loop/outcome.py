@@ -92,3 +92,12 @@ class LoopRun:
         sets = [self.plain.runs, *([self.plain.probe] if self.plain.probe else []),
                 *(st for c in self.selection.candidates.values() for st in c.evaluate.sets)]
         return len({str(f) for st in sets for per_test in st["cases"] for f in per_test})
+
+    @property
+    def dem_first_loadings(self):
+        """Distinct first loadings (cycle 0) behind those runs: runs that differ only in
+        what cycle 0 does not read (a real-time test's f) or in effects that act from its
+        end (hook-only: abrasion, when the loop shares the first loading) go on from one."""
+        sets = [self.plain.runs, *([self.plain.probe] if self.plain.probe else []),
+                *(st for c in self.selection.candidates.values() for st in c.evaluate.sets)]
+        return self.cases * len({key for st in sets for key in st["first_loadings"]})

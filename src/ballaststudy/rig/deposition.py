@@ -76,6 +76,10 @@ class DepositionParams:
         leaves them out, so runs that differ only in them are one run): none here."""
         return ()
 
+    def first_cycle_inert_keys(self):
+        """What cycle 0 does not read (runs that differ only in them share it): none."""
+        return ()
+
 
 def choose_stones(lib, area, rng):
     """Library indices drawn with replacement until their ball area reaches ``area``."""

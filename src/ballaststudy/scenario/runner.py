@@ -13,7 +13,13 @@ that state of the scenario without them - run once for all their values, where a
 that gives way in its first loading costs most - with their hooks for the cycles it ended:
 the same bytes as a run of its own. (Only the plain model keeps it: the loop adds one
 effect at a time, and a state is as large as its case file, 37 MB where a small specimen
-gave way.)"""
+gave way.)
+
+Cases that differ only in what cycle 0 does not read (one ``first_cycle_key``: a real-time
+test's frequency) run their cycle 0 once: ``run_cases`` runs it first, keeps its state
+until they are done (``first_cycle_state``), and each goes on from there under its own
+parameters (BiaxialRun.continue_under): the same bytes as a run of its own, and where the
+specimen gives way in its first loading the whole run is one.)"""
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -57,6 +63,13 @@ def without_hook_only(scenario):
     None when it has none."""
     kept = tuple((n, v) for n, v in scenario.modifiers if not MODIFIERS[n].hook_only)
     return replace(scenario, modifiers=kept) if len(kept) < len(scenario.modifiers) else None
+
+
+def first_cycle_state(case):
+    """Where the cycle-0 state of a case (scenario, k, out) is kept while the cases that
+    share it run: beside the cache folder of its output's scenario."""
+    scenario, k, out = case
+    return Path(out).parent.parent / f"{scenario.first_cycle_key}.first_cycle" / f"case{k}.npz"
 
 
 def _hooks(scenario):
@@ -113,6 +126,35 @@ def _from_first_loading(prefix, scenario, k, out, shared):
     return run
 
 
+def run_first_cycle(scenario, k, state):
+    """Case ``k`` of ``scenario`` fresh up to the end of cycle 0 (or where its specimen gave
+    way before), its hooks called there, the state saved in ``state``."""
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    if Path(state).is_file():
+        return
+    run = fresh_run(scenario, k, None)
+    run.hooks += _hooks(scenario)
+    run.run(stop_after=1)
+    Path(state).parent.mkdir(parents=True, exist_ok=True)
+    run.save_checkpoint(state)
+
+
+def _from_first_cycle(scenario, k, out, state):
+    """Case ``k`` of ``scenario`` from ``state`` (run_first_cycle's of a scenario of the same
+    first_cycle_key) under its own parameters, its hooks attached; None if the state
+    cannot go on under them (BiaxialRun.continue_under's ValueError)."""
+    run = rig_classes(scenario.kind)[1].from_checkpoint(state, cycles=scenario.cycles)
+    params = replace(run.rig.params, **{key: getattr(scenario.rig, key)
+                                        for key in run.rig.params.first_cycle_inert_keys()})
+    try:
+        run.continue_under(params)
+    except ValueError:
+        return None
+    run.checkpoint = checkpoint_of(out)
+    run.hooks += _hooks(scenario)
+    return run
+
+
 def write_case(run, scenario, k, out, figures=False, attrs=None):
     """The metrics file of a finished run, saying what made it."""
     write_outputs = rig_classes(scenario.kind)[2]
@@ -126,22 +168,28 @@ def write_case(run, scenario, k, out, figures=False, attrs=None):
         **(attrs or {})})
 
 
-def run_case(scenario, k, out, shared=None):
+def run_case(scenario, k, out, shared=None, start=None):
     """Case ``k`` of ``scenario`` into ``out`` (resuming; a finished one is kept), sharing
-    the first loading in the cache folder ``shared`` (None: not). Returns out."""
+    the first loading in the cache folder ``shared`` (None: not), or going on from the
+    cycle-0 state ``start`` (run_first_cycle's; None: none). Returns out."""
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     out = Path(out)
     if out.is_file():
         return str(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     prefix = without_hook_only(scenario) if shared else None
-    if prefix and not checkpoint_of(out).is_file():
+    resumed = checkpoint_of(out).is_file()
+    run = None
+    if prefix and not resumed:
         run = _from_first_loading(prefix, scenario, k, out, shared)
-    else:
+    elif start and not resumed:
+        run = _from_first_cycle(scenario, k, out, start)
+    if run is None:
         run, resumed = prepared_run(scenario, k, out)
-        if shared and not resumed and keeps_first_loading(scenario):
+    if shared and not resumed and not prefix and keeps_first_loading(scenario):
+        if run.s.cycle == 0:
             run.run(stop_after=1)
-            run.save_checkpoint(first_loaded(shared, scenario, k))
+        run.save_checkpoint(first_loaded(shared, scenario, k))
     run.run()
     write_case(run, scenario, k, out)
     checkpoint_of(out).unlink(missing_ok=True)
@@ -170,16 +218,45 @@ def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared
     bar = tqdm(total=len(cases), desc=desc, unit="case", disable=not progress)
     if backend == "cuda":
         _run_on_gpu(cases, bar)
-    elif jobs > 1 and len(cases) > 1:
-        with ProcessPoolExecutor(jobs) as pool:
-            for done in as_completed([pool.submit(run_case, *c, shared) for c in cases]):
-                done.result()
-                bar.update()
     else:
-        for c in cases:
-            run_case(*c, shared)
-            bar.update()
+        starts = _shared_first_cycles(cases, shared)
+        firsts = {state: case for case, state in zip(cases, starts) if state and not state.is_file()}
+        _in_processes(run_first_cycle, [(c[0], c[1], state) for state, c in firsts.items()], jobs)
+        _in_processes(run_case, [(*c, shared, start) for c, start in zip(cases, starts)], jobs, bar.update)
+        for state in {s for s in starts if s}:
+            state.unlink(missing_ok=True)
     bar.close()
+
+
+def _shared_first_cycles(cases, shared):
+    """Per case, the cycle-0 state it goes on from (first_cycle_state), or None: cases that
+    are not finished, resuming or starting from a shared first loading (hook-only
+    modifiers) and share their first_cycle_key with another, or whose state is kept from an
+    interrupted call."""
+    def free(case):
+        scenario, _, out = case
+        return not (Path(out).is_file() or checkpoint_of(out).is_file()
+                    or (shared and without_hook_only(scenario)))
+    states = [first_cycle_state(c) if free(c) else None for c in cases]
+    count = {}
+    for state in states:
+        count[state] = count.get(state, 0) + 1
+    return [s if s and (count[s] > 1 or s.is_file()) else None for s in states]
+
+
+def _in_processes(fn, calls, jobs, done=None):
+    """fn(*call) for every call, ``jobs`` processes at a time (or here, one after another)."""
+    if jobs > 1 and len(calls) > 1:
+        with ProcessPoolExecutor(jobs) as pool:
+            for future in as_completed([pool.submit(fn, *c) for c in calls]):
+                future.result()
+                if done:
+                    done()
+        return
+    for c in calls:
+        fn(*c)
+        if done:
+            done()
 
 
 def _run_on_gpu(cases, bar):

@@ -104,12 +104,23 @@ class Scenario:
 
     @property
     def key(self):
+        return self._hash(self.deciding_rig())
+
+    @property
+    def first_cycle_key(self):
+        """The key of its cycle 0: what cycle 0 does not read left out of the rig too
+        (``first_cycle_inert_keys``: the test's f). Scenarios of one first_cycle_key have
+        the same cycle 0 (runner.run_cases runs it once)."""
+        rig = self.deciding_rig()
+        return self._hash({k: v for k, v in rig.items() if k not in self.rig.first_cycle_inert_keys()})
+
+    def _hash(self, rig):
         probe = ({"perturbation_m_s": self.perturbation_m_s, "perturbation_seed": self.perturbation_seed}
                  if self.perturbation_m_s else {})
         mapped = key_of(self.mapping)
         probe.update({"stress_mapping": mapped} if mapped else {})
         text = _canonical({"kind": self.kind, "specimens": list(self.specimen_hashes),
-                           "rig": self.deciding_rig(), "cycles": self.cycles,
+                           "rig": rig, "cycles": self.cycles,
                            "modifiers": [[n, _rounded(dict(v))] for n, v in self.modifiers],
                            "covariates": self.read_covariates(), "metrics": self.metrics, **probe})
         return hashlib.sha1(text.encode()).hexdigest()[:12]

@@ -115,6 +115,7 @@ class BiaxialState(CycleState):
     peak_stress: float = 0.0          # q's largest window mean [Pa] in this loading branch and
     peak_strain: float = float("nan")  # the axial strain at the window's centre (peak.py)
     watched_samples: int = 0          # the samples check_stalled has read in this branch
+    sine_servo_step: int = -1         # the engine step the sinusoid's servo was last set at
 
 
 class BiaxialRun(CyclicRun):
@@ -357,6 +358,31 @@ class BiaxialRun(CyclicRun):
         need = 2.0 * np.pi * c.get(k, "frequency") * compliance * dq
         c.set(k, gain=float(compliance / (p.sine_servo_time_waves * t_w)) * KPA,
               v_max=max(p.sine_velocity_min_m_s, float(need)), integral=0.0)
+        self.s.sine_servo_step = self.rig.sim.step
+
+    def continue_under(self, params):
+        """The run, at the end of cycle 0, goes on under ``params``, which differ from its
+        own only in what cycle 0 does not read (``params.first_cycle_inert_keys()``: the
+        test's f; cycle 0 loads at the first-loading rate in either mode): what the first
+        trough set from them is set anew - real time: the sinusoid's frequency and its
+        servo's speed limit (quasi-static: f is inert throughout) - so the cycles run as
+        in a run of its own (runner.run_cases: one cycle 0 for a test's frequencies).
+        ValueError if they differ in more, or the run is elsewhere, or the servo was last
+        set before the trough (a first unloading too short to measure)."""
+        old, new, s = self.rig.params.to_dict(), params.to_dict(), self.s
+        differ = {k for k in new if new[k] != old[k]}
+        if not differ <= set(params.first_cycle_inert_keys()):
+            raise ValueError(f"cycle 0 reads {sorted(differ - set(params.first_cycle_inert_keys()))}")
+        if s.cycle != 1 and not (s.failure and s.cycle == 0):
+            raise ValueError(f"the run is at cycle {s.cycle}, not at the end of cycle 0")
+        servo_now = s.sine_servo_step == self.rig.sim.step
+        if s.phase != "done" and params.mode == "real_time" and not servo_now:
+            raise ValueError("the sinusoid's servo was not set at the first trough")
+        self.rig.params = params
+        if s.phase == "done" or params.mode != "real_time":
+            return
+        self.control.set(self.ids.sine, frequency=params.frequency_Hz)
+        self._sine_servo(s.compliance[0] or s.compliance[1], params.deviator_range_Pa)
 
     def _adapt_bound(self, k0, k1, loading):
         """Move the sinusoid's commanded bound (hi after a loading branch, lo after an

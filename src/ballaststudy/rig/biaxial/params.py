@@ -77,6 +77,12 @@ class BiaxialParams(DepositionParams):
         (tests/scenario/test_modifiers.py runs a case at two f: the same bytes)."""
         return ("frequency_Hz",) if self.mode == "quasi_static" else ()
 
+    def first_cycle_inert_keys(self):
+        """What cycle 0 does not read: the test's frequency (the first loading runs at
+        first_loading_inertial_number in either mode; the sinusoid starts at its end).
+        A run at the end of cycle 0 goes on under another f (BiaxialRun.continue_under)."""
+        return ("frequency_Hz",)
+
     def take_conditions(self, c):
         """A measured test's loading conditions (``measured.importer.load_conditions``):
         p, the q bounds, f."""
