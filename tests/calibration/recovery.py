@@ -53,9 +53,12 @@ def _config(folder):
     return path
 
 
-def recover(library, folder, calibration_seeds, truth_seeds, conditions_kPa, cycles=5, jobs=2, seed=11):
+def recover(library, folder, calibration_seeds, truth_seeds, conditions_kPa, cycles=5, jobs=2, seed=11,
+            noise_seed=5):
     """Recovery with specimens of ``calibration_seeds`` (K) and one fresh truth specimen per
-    condition (p, q_max) [kPa] (q_min 10 kPa, 5 Hz quasi-static)."""
+    condition (p, q_max) [kPa] (q_min 10 kPa, 5 Hz quasi-static), the digitisation noise
+    drawn with ``noise_seed``. Specimens are kept as ``folder``/specimen<seed>.nc and cases
+    under their content's key, so recoveries in one folder share what they have in common."""
     folder = Path(folder)
     config = _config(folder)
     conditions = [_planted_conditions(folder / f"test{j}.yaml", q, p_kPa=p, frequency_Hz=5.0)
@@ -68,7 +71,7 @@ def recover(library, folder, calibration_seeds, truth_seeds, conditions_kPa, cyc
     for j, (c, s) in enumerate(zip(conditions, truths)):
         truth = Evaluator(names, [s], [(c, points)], config, cycles, "axial_strain", folder / f"truth{j}")
         y.append(truth(np.array([list(TRUE.values())]))[0][0])
-    y = np.concatenate(y) + np.random.default_rng(5).normal(0.0, MEASUREMENT_SD, len(points) * len(conditions))
+    y = np.concatenate(y) + np.random.default_rng(noise_seed).normal(0.0, MEASUREMENT_SD, len(points) * len(conditions))
     point_test = np.repeat(np.arange(len(conditions)), len(points))
     evaluate = Evaluator(names, calibration, [(c, points) for c in conditions], config, cycles, "axial_strain",
                          folder / "cal", jobs=jobs)
@@ -76,3 +79,23 @@ def recover(library, folder, calibration_seeds, truth_seeds, conditions_kPa, cyc
                     include=np.array([3.5, 0.7]), measurement_var=MEASUREMENT_SD ** 2, point_test=point_test)
     after = evaluate(res.posterior.mean[None])[0]
     return Recovery(res, y, after, len(evaluate.sets) * len(calibration) * len(conditions))
+
+
+def replicates(library, folder, calibration_seeds, conditions_kPa, count, first_truth_seed=101, first_noise_seed=5,
+               **kw):
+    """``count`` recoveries that differ in their truths' specimens (fresh seeds from
+    ``first_truth_seed`` on, one per condition) and digitisation noise (seeds from
+    ``first_noise_seed`` on), on the same calibration specimens: what coverage is counted over.
+    Their initial designs are the same sets, run once."""
+    n = len(conditions_kPa)
+    return [recover(library, folder, calibration_seeds,
+                    range(first_truth_seed + n * r, first_truth_seed + n * (r + 1)), conditions_kPa,
+                    noise_seed=first_noise_seed + r, **kw)
+            for r in range(count)]
+
+
+def covered(recoveries):
+    """(R, d) bool: whether each recovery's 90 % interval holds each true value."""
+    truth = np.array(list(TRUE.values()))
+    iv = np.array([r.result.posterior.interval90 for r in recoveries])
+    return (iv[:, :, 0] <= truth) & (truth <= iv[:, :, 1])

@@ -89,15 +89,16 @@ class LoopRun:
     def dem_runs(self):
         """Distinct case files behind them: cases of one scenario key are one run (tests
         that differ only in what does not act, a quasi-static test's f)."""
-        sets = [self.plain.runs, *([self.plain.probe] if self.plain.probe else []),
-                *(st for c in self.selection.candidates.values() for st in c.evaluate.sets)]
-        return len({str(f) for st in sets for per_test in st["cases"] for f in per_test})
+        return len({str(f) for st in self._evaluated_sets() for per_test in st["cases"] for f in per_test})
 
     @property
     def dem_first_loadings(self):
         """Distinct first loadings (cycle 0) behind those runs: runs that differ only in
         what cycle 0 does not read (a real-time test's f) or in effects that act from its
         end (hook-only: abrasion, when the loop shares the first loading) go on from one."""
-        sets = [self.plain.runs, *([self.plain.probe] if self.plain.probe else []),
+        return self.cases * len({key for st in self._evaluated_sets() for key in st["first_loadings"]})
+
+    def _evaluated_sets(self):
+        """Every evaluated set (Evaluator.sets' entries): the plain model's, its probe's, the candidates'."""
+        return [self.plain.runs, *([self.plain.probe] if self.plain.probe else []),
                 *(st for c in self.selection.candidates.values() for st in c.evaluate.sets)]
-        return self.cases * len({key for st in sets for key in st["first_loadings"]})
