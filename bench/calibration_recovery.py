@@ -11,7 +11,10 @@ truth, the RMSE before/after and the DEM cases run.
         --conditions 30:200 60:200 30:150
 
 Each condition is p:q_max in kPa (q_min 10 kPa, 5 Hz quasi-static). Calibration specimens
-have seeds 1..K, the truths 101, 102, ...
+have seeds 1..K, the truths 101, 102, ... With ``--replicates R`` the recovery is made R
+times with fresh truth specimens and noise (tests.calibration.recovery.replicates: the
+calibration specimens and the initial design's cases shared) and the coverage of the 90 %
+intervals is counted over them.
 """
 import argparse
 import sys
@@ -24,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 
 from ballaststudy.calibration.bayes import rmse  # noqa: E402
 from ballaststudy.rig.library import synthetic_library  # noqa: E402
-from tests.calibration.recovery import LOWER, TRUE, UPPER, recover  # noqa: E402
+from tests.calibration.recovery import LOWER, TRUE, UPPER, covered, replicates  # noqa: E402
 
 
 def main(argv=None):
@@ -34,6 +37,7 @@ def main(argv=None):
     ap.add_argument("--cycles", type=int, default=5)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("--replicates", type=int, default=1, help="recoveries with fresh truths and noise")
     ap.add_argument("--work-dir", type=Path, help="keep the specimens and cases here (default: a temporary folder)")
     args = ap.parse_args(argv)
     conditions = [tuple(float(v) for v in c.split(":")) for c in args.conditions]
@@ -43,18 +47,22 @@ def main(argv=None):
         folder.mkdir(parents=True, exist_ok=True)
         library = folder / "BPM.nc"
         synthetic_library(24, size=(0.035, 0.065), r0=0.008, seed=3, database="tiny").to_netcdf(library)
-        rec = recover(library, folder, range(1, args.specimens + 1), range(101, 101 + len(conditions)),
-                      conditions, args.cycles, args.jobs, args.seed)
-    post = rec.result.posterior
+        recs = replicates(library, folder, range(1, args.specimens + 1), conditions, args.replicates,
+                          cycles=args.cycles, jobs=args.jobs, seed=args.seed)
+        run = len(list((folder / "cal" / "cases").iterdir()))
     print(f"design: K = {args.specimens}, conditions {args.conditions}, {args.cycles} cycles; "
-          f"{rec.cases} DEM cases in {(time.time() - t0) / 60:.1f} min")
-    for k, name in enumerate(TRUE):
-        lo, hi = post.interval90[k]
-        print(f"  {name}: true {TRUE[name]}, mean {post.mean[k]:.3f}, 90 % [{lo:.3f}, {hi:.3f}] "
-              f"({100 * (hi - lo) / (UPPER[k] - LOWER[k]):.0f} % of the prior), "
-              f"{'holds' if lo <= TRUE[name] <= hi else 'MISSES'} the truth")
-    print(f"  RMSE Table 4.2 {rmse(rec.result.curves[0].mean(axis=0), rec.y):.4g} -> posterior mean "
-          f"{rmse(rec.after.mean(axis=0), rec.y):.4g}; ESS {post.ess:.0f}; t dof {rec.result.dof}")
+          f"{args.replicates} recoveries, {run} calibration scenarios of K cases run in "
+          f"{(time.time() - t0) / 60:.1f} min")
+    for r, rec in enumerate(recs):
+        post = rec.result.posterior
+        for k, name in enumerate(TRUE):
+            lo, hi = post.interval90[k]
+            print(f"  {r}: {name}: true {TRUE[name]}, mean {post.mean[k]:.3f}, 90 % [{lo:.3f}, {hi:.3f}] "
+                  f"({100 * (hi - lo) / (UPPER[k] - LOWER[k]):.0f} % of the prior), "
+                  f"{'holds' if lo <= TRUE[name] <= hi else 'MISSES'} the truth")
+        print(f"  {r}: RMSE Table 4.2 {rmse(rec.result.curves[0].mean(axis=0), rec.y):.4g} -> posterior mean "
+              f"{rmse(rec.after.mean(axis=0), rec.y):.4g}; ESS {post.ess:.0f}; t dof {rec.result.dof}")
+    print(f"covered: {dict(zip(TRUE, covered(recs).sum(axis=0).tolist()))} of {args.replicates}")
 
 
 if __name__ == "__main__":
