@@ -2,33 +2,21 @@
 made by the model with known F_str_co and mu (not Table 4.2's) under three conditions, each
 on a fresh specimen the calibration never sees (a laboratory test is a specimen of its
 own), plus a digitisation noise, are calibrated back jointly with the biaxial rig on two
-other specimens (tests/calibration/recovery.py): the true values lie inside the 90 %
-intervals, and the friction's interval is narrower than its prior.
+other specimens (tests/calibration/recovery.py). One draw of a 90 % interval misses one
+time in ten, so coverage is counted over REPLICATES recoveries with fresh truth specimens
+and noise (the calibration specimens, and the initial design's cases, shared): each true
+value inside at least AT_LEAST of them (fewer: < 2 % if they cover 90 %), and the
+friction's intervals narrower than its prior (median).
 
-Measured 2026-11-27 (likelihood of calibration.bayes): 78 DEM cases, mu 90 % [0.70, 1.19]
-(62 % of the prior; true 0.9), F_str_co [1.26, 5.75] (90 %; true 2.0); 11 min on 2 cores
-shared with a calibration run (~5 min alone).
-
-Other designs (bench/calibration_recovery.py; calibration specimens seeds 1..K, truths
-101..; one draw each):
-
-| K | conditions | consolidation windows | mu, F_str_co: 90 % interval / prior |
-|---|---|---|---|
-| 2 | 1 | 1000 steps (the other tests') | 89 %, 88 % |
-| 2 | 3 | 1000 steps | 74 %, 82 % |
-| 2 | 1 | 5000 (the config's, as here) | 59 %, 85 % |
-| 2 | 3 | 5000 | 58 %, 79 % |
-| 4 | 1 | 5000 | 83 %, 84 % |
-| 4 | 3 | 5000 | 71 %, 82 % |
-
-The truth was inside every interval. Widths from one draw scatter from 58 to 89 % for mu
-with no order in K or conditions, so this test asserts only "narrower than the prior" (90 %)
-for mu: what the design shows is that F_str_co, acting only through the few bonds that
-break, is not identified at this scale (79-90 % everywhere), and that the lab specimen's
-own offset stays in the residual however many specimens of ours run (covariance
-C (1 + 1/K)). Until 2026-11-27 the test asserted mu < 65 % on one curve with 1000-step
-windows: it passed (56 %) under a likelihood that counted a specimen's offset once per
-point, and failed on main since (86 %; 89 % under the new likelihood)."""
+Measured 2026-11-29 (`python -m pytest -m slow -n 0 -s tests/calibration/test_recovery.py`:
+66 min on 2 cores, half of it beside other work; 228
+calibration scenarios of 2 cases, 21 a replicate after the first's 42): covered F_str_co 7,
+mu 9 of 10; median share of the prior 73 % and 62 %. F_str_co is hardly identified: every
+posterior mean lies above the truth (2.7-4.5 for 2.0), the intervals reach the prior's
+upper part (4.5-5.8 of 6) and the three misses are at their lower end (2.23, 2.92, 2.78) -
+at the edge of what 90 % coverage allows (7 of 10 or fewer: 7 %). Replicate 0 is the one
+draw this test asserted until 2026-11-29: F_str_co [2.23, 5.63] missed 2.0 there since
+2026-11-28 (it held [1.26, 5.75] on 2026-11-27; the cause of the change is not traced)."""
 import numpy as np
 import pytest
 from scipy.stats import binom
