@@ -77,8 +77,11 @@ class Evaluator:
         return {measured_test_name(t["conditions"]): t["mapping"] for t in self.tests}
 
     def _first_loading(self, scenario):
-        """The first_cycle_key of the cycle 0 a scenario's cases go on from (run_cases: a
-        real-time test's f apart; sharing the first loading, its hook-only modifiers apart)."""
+        """The key of the cycle 0 a scenario's cases go on from (run_cases on the cpu: a
+        real-time test's f apart; sharing the first loading, its hook-only modifiers apart;
+        on the GPU each its own)."""
+        if self.backend == "cuda":
+            return scenario.key
         return ((self.shared and without_hook_only(scenario)) or scenario).first_cycle_key
 
     def __call__(self, thetas):

@@ -19,7 +19,7 @@ Cases that differ only in what cycle 0 does not read (one ``first_cycle_key``: a
 test's frequency) run their cycle 0 once: ``run_cases`` runs it first, keeps its state
 until they are done (``first_cycle_state``), and each goes on from there under its own
 parameters (BiaxialRun.continue_under): the same bytes as a run of its own, and where the
-specimen gives way in its first loading the whole run is one.)"""
+specimen gives way in its first loading the whole run is one. (Both on the cpu backend.)"""
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -207,9 +207,9 @@ def check_backend(backend):
 
 def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared=None):
     """Every (scenario, k, out) in ``cases``, each ``out`` once (scenarios of one key share
-    their cases): ``jobs`` processes at a time (cpu; sharing the first loading in the
-    cache folder ``shared``, see above), or every unfinished case in GPU batches, one per
-    contact law (cuda)."""
+    their cases): ``jobs`` processes at a time (cpu; cycle 0 run once for cases of one
+    first_cycle_key, and the first loading shared in the cache folder ``shared``, see
+    above), or every unfinished case in GPU batches, one per contact law (cuda)."""
     check_backend(backend)
     unique = {}
     for case in cases:
@@ -225,6 +225,8 @@ def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared
         _in_processes(run_case, [(*c, shared, start) for c, start in zip(cases, starts)], jobs, bar.update)
         for state in {s for s in starts if s}:
             state.unlink(missing_ok=True)
+            if state.parent.is_dir() and not any(state.parent.iterdir()):
+                state.parent.rmdir()
     bar.close()
 
 
