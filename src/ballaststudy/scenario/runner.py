@@ -111,11 +111,7 @@ def _from_first_loading(prefix, scenario, k, out, shared):
     end of cycle 0 (run here if no case has kept it), its hooks called for the cycles that
     state ended, then attached; it checkpoints beside ``out``."""
     state = first_loaded(shared, prefix, k)
-    if not state.is_file():
-        run = fresh_run(prefix, k, None)
-        run.run(stop_after=1)
-        state.parent.mkdir(parents=True, exist_ok=True)
-        run.save_checkpoint(state)
+    run_first_cycle(prefix, k, state)
     run = rig_classes(scenario.kind)[1].from_checkpoint(state, cycles=scenario.cycles)
     run.checkpoint = checkpoint_of(out)
     hooks = _hooks(scenario)
