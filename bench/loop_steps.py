@@ -18,11 +18,13 @@ from pathlib import Path
 
 import xarray as xr
 
+from ballaststudy.scenario.modifiers import MODIFIERS
+
 
 def effect_of(modifiers):
-    names = [m[0] if isinstance(m, (list, tuple)) else str(m) for m in modifiers]
-    effects = [n for n in names if n not in ("material",)]
-    return effects[-1] if effects else "plain"
+    """The case's effect (a modifier of role effect), or plain (material ones only)."""
+    effects = [name for name, _ in modifiers if MODIFIERS[name].role != "material"]
+    return effects[0] if effects else "plain"
 
 
 def main(argv=None):
