@@ -74,8 +74,10 @@ def main(argv=None):
     points = np.asarray(a.points, float)
 
     def evaluate(names, values, effect=None, base=None):
+        # the plain cases keep their cycle-0 state for a hook-only effect (abrasion), as in the loop
+        share = effect is None and base is None or effect is not None and MODIFIERS[effect].hook_only
         ev = Evaluator(names, a.specimens, [(a.test, points)], cfg, a.cycles, "axial_strain", out,
-                       jobs=a.jobs, effect=effect, base=base, share_first_loading=True)
+                       jobs=a.jobs, effect=effect, base=base, share_first_loading=share)
         at = ev(np.array([values], float))[0]                                   # (K, P)
         return at, np.array(ev.sets[-1]["failed"][0], bool)
 
