@@ -3,6 +3,7 @@ DEM run and no command line: the per-point order, the long-term horizon when a l
 be fitted, the pooled RMSE, the verdict rule, and loop.nc, chosen.yaml, report.md and
 curves.png of a hand-made run with one effect chosen. The end-to-end loop is test_cli.py's."""
 import dataclasses
+import json
 import warnings
 from types import SimpleNamespace
 
@@ -21,6 +22,7 @@ from ballaststudy.loop.select import ALPHA, HeldOut
 from ballaststudy.loop.accumulation import LawFit
 from ballaststudy.loop.horizon import LongTermLaw
 from ballaststudy.loop.statistics import LongTerm, LoopStatistics, candidate_rows, long_term
+from ballaststudy.loop.step import shared_runs, step_rows
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402 (after the backend)
@@ -78,8 +80,9 @@ def _chosen_run():
     rng = np.random.default_rng(0)
     runs = lambda name, shared=False: [[f"{name}{'' if shared else j}/case{k}.nc" for k in range(2)] for j in range(2)]
     plain = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("plain", shared=True),
-                 first_loadings=["plain"] * 2)
-    after = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("after"), first_loadings=["a0", "a1"])
+                 first_loadings=["plain"] * 2, failed=[[False, False]] * 2)
+    after = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("after"), first_loadings=["a0", "a1"],
+                 failed=[[False, True], [False, False]])
     design = [dict(curves=rng.random((2, 2, 3)), cases=runs(f"design{i}"), first_loadings=[f"d{i}"] * 2)
               for i in range(2)]          # (their tests differ only in what cycle 0 does not read)
     held = HeldOut(np.array([1.0, 2.0]), TARGETS.y + 1e-4, np.zeros((2, 1)))
@@ -92,9 +95,16 @@ def _chosen_run():
     rows = [dict(test=name, source="planted", points=3, rmse=2e-4 * (j + 1), bias=1e-4, bias_p=0.5, slope_ln_n=0.0,
                  slope_p=np.nan) for j, name in enumerate(TARGETS.names)]
     no_fit = LongTerm(np.zeros(0), np.zeros(0), np.zeros(0), None)
+    step = step_rows(TARGETS.names, WHOLE, {"plain": plain, "end_restraint": after}, 3, 1e-4)
     stats = LoopStatistics(rows, [r | dict(rmse=1e-4) for r in rows], [], candidate_rows(selection, TARGETS),
-                           [no_fit] * 2, [no_fit] * 2, rmse(TARGETS.y, plain_model.prediction))
+                           [no_fit] * 2, [no_fit] * 2, rmse(TARGETS.y, plain_model.prediction), step,
+                           shared_runs(plain["cases"]))
     return run, stats
+
+
+# the tests' whole measured curves: a reaches N = 2000, b ends within the DEM horizon
+WHOLE = [(np.array([1.0, 2.0, 3.0, 100.0, 2000.0]), np.array([0.001, 0.002, 0.0025, 0.01, 0.02])),
+         (np.array([1.0, 3.0]), np.array([0.001, 0.003]))]
 
 
 def test_a_chosen_effect_in_every_output(tmp_path):
@@ -121,6 +131,12 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert "| 0.01 | 2 | chosen |" in text                   # held-out RMSE, cut / scatter sqrt(4), verdict
     assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text
     assert "No accumulation law given" in text and ds.attrs["long_term_law"] == "none"
+    assert "N = 1 -> 3 (100 -> 2000 cut at the 3 cycles simulated" in text
+    assert "The DEM horizon ends before N = 2000" in text and "runs are one for a, b (" in text
+    assert "| a | - | +1 | +0.15 |" in text and "| b | - | - | +0.2 |" in text     # percent
+    assert "| 0/2 | yes |" in text and "| 1/2 | - |" in text     # end_restraint's a: one case left, no interval
+    step = json.loads(ds.attrs["frequency_step_json"])
+    assert step[0]["measured_step"] == pytest.approx(0.01) and step[0]["models"]["end_restraint"]["kept"] == 1
     plot_curves(tmp_path / "curves.png", run, stats)
     assert (tmp_path / "curves.png").stat().st_size > 1000
 
@@ -132,9 +148,8 @@ def test_the_long_term_law_in_every_output(tmp_path):
     run, stats = _chosen_run()
     run = dataclasses.replace(run, long_term_law=LAW)
     beyond = [(np.array([100.0, 5e5]), np.array([0.004, 0.006]))] * 2
-    stats = LoopStatistics(stats.before, stats.after, [], stats.candidates,
-                           long_term(beyond, run.cycles, run.plain.runs["curves"], LAW),
-                           long_term(beyond, run.cycles, run.selection.after["curves"], LAW), stats.plain_rmse)
+    stats = dataclasses.replace(stats, long_term=long_term(beyond, run.cycles, run.plain.runs["curves"], LAW),
+                                long_term_after=long_term(beyond, run.cycles, run.selection.after["curves"], LAW))
     text = report_markdown(run, stats)
     assert "fitted by the **log** law" in text and "within +-0.4 % (0.9 quantile)" in text
     assert "This run fits 3 cycles, fewer than 1000" in text
@@ -153,8 +168,10 @@ def test_the_long_term_law_in_every_output(tmp_path):
 def test_no_effect_chosen():
     run, stats = _chosen_run()
     run = dataclasses.replace(run, selection=Selection(run.selection.candidates, run.selection.evidence))
-    stats = LoopStatistics(stats.before, None, [], candidate_rows(run.selection, TARGETS), stats.long_term, None,
-                           stats.plain_rmse)
+    stats = dataclasses.replace(stats, after=None, candidates=candidate_rows(run.selection, TARGETS),
+                                long_term_after=None, step=[r | dict(models={"plain": r["models"]["plain"]})
+                                                            for r in stats.step])
     assert chosen_doc(stats, {"mu": 0.5}) == {"effect": "none", "parameters": {}, "interval90": {},
                                               "material_parameters": {"mu": 0.5}, "stress_mapping": "none"}
     assert "after" not in loop_dataset(run, stats) and "**No effect chosen**" in report_markdown(run, stats)
+    assert "end_restraint 1 -> 3" not in report_markdown(run, stats)

@@ -1,6 +1,6 @@
 """loop.nc: every curve of a loop run and every number its report quotes, self-describing
-(units and long_name on each variable; the per-test, covariate and candidate tables as JSON
-attributes)."""
+(units and long_name on each variable; the per-test, covariate, candidate and frequency-step
+tables as JSON attributes)."""
 import json
 
 import numpy as np
@@ -33,6 +33,7 @@ def loop_dataset(run, stats):
         attrs={"Conventions": CF, "title": "closing the loop with measured data (issue 14)",
                "tests_json": json.dumps(stats.before), "covariate_tests_json": json.dumps(stats.covariates),
                "candidates_json": json.dumps(stats.candidates), "chosen": sel.chosen or "none",
+               "frequency_step_json": json.dumps(stats.step), "frequency_step_units": units,
                "material_parameters_json": json.dumps(run.base),
                "untestable_effects": ", ".join(sel.untestable) or "none",
                "likelihood": likelihood_words(run.likelihood_dof), **_long_term_attrs(run.long_term_law),

@@ -3,7 +3,9 @@
 Two horizons, never mixed: the DEM horizon (measured points with N <= the simulated
 cycles, compared with the ensembles) and the long-term horizon (points beyond, compared
 with the law the measured curves chose (loop/horizon.py) fitted to each ensemble mean and
-extrapolated - an extrapolation, said so, with the error that law made on measured curves)."""
+extrapolated - an extrapolation, said so, with the error that law made on measured curves).
+The frequency step (step.py) stands between them: the measured increment from N = 100 to
+2000 on the whole curve beside the ensembles' over the cycles they simulated."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,7 +15,9 @@ from ..inputs import open_netcdf
 from ..measured.importer import load_conditions
 from ..scenario.modifiers import MODIFIERS
 from .accumulation import fit_ensemble, predict
+from .horizon import measured_curve
 from .residual import covariate_tests, residual, summary
+from .step import shared_runs, step_rows
 
 COVARIATES = ("frequency_Hz", "confining_pressure_kPa", "deviator_max_kPa", "VCI")
 # the plain model's internal signals at its last simulated cycle (mean over the cases)
@@ -43,6 +47,8 @@ class LoopStatistics:
     long_term: list            # LongTerm per test, plain model
     long_term_after: list      # LongTerm per test, chosen effect; None: none chosen
     plain_rmse: float          # the plain model over every point of the DEM horizon
+    step: list                 # step.step_rows: the increment over the frequency step's window
+    step_shared: list          # step.shared_runs of the plain model: tests whose runs are one
 
     @property
     def chosen_row(self):
@@ -69,7 +75,11 @@ def loop_statistics(run):
         long_term=long_term(beyond, run.cycles, plain_curves, run.long_term_law),
         long_term_after=(long_term(beyond, run.cycles, sel.after["curves"], run.long_term_law)
                          if sel.after is not None else None),
-        plain_rmse=rmse(run.targets.y, run.plain.prediction))
+        plain_rmse=rmse(run.targets.y, run.plain.prediction),
+        step=step_rows(run.targets.names, [measured_curve(p, lp["quantity"]) for p in run.targets.measured],
+                       {"plain": run.plain.runs, **({sel.chosen: sel.after} if sel.after is not None else {})},
+                       lp["cycles"], lp["measurement_sd"]),
+        step_shared=shared_runs(run.plain.runs["cases"]))
 
 
 def describe_test(name, conditions_path):
