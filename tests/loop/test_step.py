@@ -25,6 +25,9 @@ def test_a_measured_increment_is_read_in_ln_n_and_never_extrapolated():
     assert measured_increment(n, v, 100.0, 2000.0) == pytest.approx(0.004 * np.log(20.0), rel=1e-12)
     assert measured_increment(n, v, 1.0, 12.0) == pytest.approx(0.004 * np.log(12.0), rel=1e-12)
     assert np.isnan(measured_increment(n[:-1], v[:-1], 100.0, 2000.0))       # ends at N = 900
+    digitised = np.array([1.03, 12.0, 1950.0])                               # N = 1 and 2000 read off a log axis
+    assert measured_increment(digitised, _log_curve(digitised, 0.0, 1.0), 1.0, 2000.0) == pytest.approx(np.log(1950 / 1.03))
+    assert np.isnan(measured_increment(digitised, v[:3], 1.0, 2100.0))       # 2100 is 8 % past 1950
     assert np.isnan(measured_increment(n[2:], v[2:], 1.0, 12.0))             # starts at N = 60
     assert np.isnan(measured_increment(np.zeros(0), np.zeros(0), 1.0, 12.0))
 

@@ -25,6 +25,11 @@ from ..scenario.results import at_points
 
 STEP_CYCLES = (100.0, 2000.0)     # the window of Sun et al.'s frequency step
 LEVEL = 0.9                       # the prediction interval's coverage
+# how far (a factor in N) a window's end may lie beyond a measured curve's first or last
+# point and still read it: N read off a log axis by digitising scatters so (Sun et al.'s
+# first loading, N = 1, reads 1.00-1.02; their points in the window sit a few % off their
+# nominal N), and an end read there moves by less than the curve's own scatter
+DIGITISED_N = 1.05
 
 
 def window(cycles):
@@ -36,8 +41,8 @@ def window(cycles):
 
 def measured_increment(n, values, lo, hi):
     """values(hi) - values(lo) on a measured curve (N sorted, finite), interpolated in ln N;
-    NaN unless points lie at or either side of both ends."""
-    if n.size == 0 or lo < n[0] or hi > n[-1]:
+    NaN unless points lie either side of both ends, or within DIGITISED_N of one."""
+    if n.size == 0 or lo * DIGITISED_N < n[0] or hi > n[-1] * DIGITISED_N:
         return float("nan")
     at = np.interp(np.log([lo, hi]), np.log(n), values)
     return float(at[1] - at[0])
