@@ -12,7 +12,7 @@ from ballaststudy.dem.gpu.kernels import HALT_EVENT, HALT_STEPS
 
 from .beds import RHO, assert_same_motion
 
-STEPS = 90
+STEPS = 45
 
 
 def servo_wall(sim):
@@ -28,16 +28,16 @@ def servo_wall(sim):
 
 def sine_body(sim):
     """The right wall driven as a body of 0.1 kg under a sinusoidal load of 2 N above
-    today's (the biaxial rig's applied loads) at 500 Hz, a quarter period in: a PEAK after
-    25 steps, a TROUGH 50 steps later."""
+    today's (the biaxial rig's applied loads) at 1000 Hz, a quarter period in: a PEAK after
+    about 13 steps, a TROUGH 25 steps later."""
     right = [len(sim.walls) - 1]
     ctl = Control(every=1)
     f = ctl.wall_force(right, 0)
     now = float(sim.walls.force[right[0], 0])
-    k = ctl.sine(f, ctl.walls(right, 0), lo=now, hi=now + 2.0, frequency=500.0, gain=1.0,
+    k = ctl.sine(f, ctl.walls(right, 0), lo=now, hi=now + 2.0, frequency=1000.0, gain=1.0,
                  v_max=0.1, integral_steps=0, areal_mass=0.1)
     ctl.build()
-    ctl.set(k, t0=sim.time - 0.5e-3)      # the first reversal (a peak) after 25 steps
+    ctl.set(k, t0=sim.time - 0.25e-3)     # the first reversal (a peak) after ~13 steps
     return ctl
 
 
@@ -106,12 +106,12 @@ def cases(beds):
     return sims, [servo_wall(sims[0]), sine_body(sims[1]), cyclic_plate(landed)]
 
 
-@pytest.mark.parametrize("check_every", [1, 25])
+@pytest.mark.parametrize("check_every", [1, 10])
 def test_controllers_step_like_the_cpu_engine(beds, check_every):
     """A servo wall (window events, targets changed by the host), a wall driven as a body
     under a sinusoidal load (peaks and troughs) and a cyclic plate (a held clump between
     two reactions), in one batch: each case halts at its own events (checked every step,
-    or every 25: a halted case idles while the others step on), its host reacts, and
+    or every 10: a halted case idles while the others step on), its host reacts, and
     every case ends as on the CPU: the same events at the same steps, samples, readings
     and motion within round-off."""
     sims, ctls = cases(beds)
