@@ -175,3 +175,18 @@ def test_no_effect_chosen():
                                               "material_parameters": {"mu": 0.5}, "stress_mapping": "none"}
     assert "after" not in loop_dataset(run, stats) and "**No effect chosen**" in report_markdown(run, stats)
     assert "end_restraint 1 -> 3" not in report_markdown(run, stats)
+
+
+def test_no_candidate_testable(tmp_path):
+    """Every effect untestable (no target declares its covariate): the plain model alone,
+    judged and written; no candidate variables in loop.nc."""
+    run, stats = _chosen_run()
+    run = dataclasses.replace(run, selection=Selection({}, {}, untestable=["fouling"]))
+    stats = dataclasses.replace(stats, after=None, candidates=[], long_term_after=None,
+                                step=[r | dict(models={"plain": r["models"]["plain"]}) for r in stats.step])
+    ds = loop_dataset(run, stats)
+    assert "candidate" not in ds and ds.attrs["chosen"] == "none" and ds.sizes["effect"] == 0
+    text = report_markdown(run, stats)
+    assert "**No effect chosen**" in text and "| fouling | - |" in text
+    plot_curves(tmp_path / "curves.png", run, stats)
+    assert chosen_doc(stats, {})["effect"] == "none"

@@ -73,7 +73,10 @@ def _plain(plain, units, long_name):
 
 
 def _candidates(candidates, rows, units, long_name):
-    """Each candidate at its design sets (the run at its fitted value, if chosen, is `after`)."""
+    """Each candidate at its design sets (the run at its fitted value, if chosen, is `after`);
+    none where no candidate was testable."""
+    if not candidates:
+        return {}
     return {
         "candidate": (("effect", "set", "test", "case", "cycle"),
                       np.array([[s["curves"] for s in c.evaluate.sets[: len(c.thetas)]] for c in candidates.values()]),
