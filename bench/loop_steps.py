@@ -1,7 +1,7 @@
 """Where a loop's DEM steps went: per test and per set (plain, each effect), from the case
 files of a finished loop run.
 
-    python bench/loop_steps.py results/loop/cases [--by test|set|both]
+    python bench/loop_steps.py results/loop/cases
 
 A case's steps are its last sample's step. Counted as run, not as written: a hook-only
 effect's case (abrasion) goes on from the plain case's first loading, so only its steps
