@@ -21,7 +21,7 @@ from ballaststudy.loop.report import chosen_doc
 from ballaststudy.loop.select import ALPHA, HeldOut
 from ballaststudy.loop.accumulation import LawFit
 from ballaststudy.loop.horizon import LongTermLaw
-from ballaststudy.loop.statistics import LongTerm, LoopStatistics, candidate_rows, long_term
+from ballaststudy.loop.statistics import LongTerm, LoopStatistics, candidate_rows, long_term, step_models
 from ballaststudy.loop.step import shared_runs, step_rows
 
 matplotlib.use("Agg")
@@ -83,7 +83,8 @@ def _chosen_run():
                  first_loadings=["plain"] * 2, failed=[[False, False]] * 2)
     after = dict(curves=0.001 + 0.001 * rng.random((2, 2, 3)), cases=runs("after"), first_loadings=["a0", "a1"],
                  failed=[[False, True], [False, False]])
-    design = [dict(curves=rng.random((2, 2, 3)), cases=runs(f"design{i}"), first_loadings=[f"d{i}"] * 2)
+    design = [dict(curves=rng.random((2, 2, 3)), cases=runs(f"design{i}"), first_loadings=[f"d{i}"] * 2,
+                   failed=[[False, False]] * 2)
               for i in range(2)]          # (their tests differ only in what cycle 0 does not read)
     held = HeldOut(np.array([1.0, 2.0]), TARGETS.y + 1e-4, np.zeros((2, 1)))
     candidate = Candidate(np.array([[0.0], [1.2]]), [], held, (np.array([0.3]), np.array([[0.2, 0.4]]), 100.0),
@@ -95,7 +96,7 @@ def _chosen_run():
     rows = [dict(test=name, source="planted", points=3, rmse=2e-4 * (j + 1), bias=1e-4, bias_p=0.5, slope_ln_n=0.0,
                  slope_p=np.nan) for j, name in enumerate(TARGETS.names)]
     no_fit = LongTerm(np.zeros(0), np.zeros(0), np.zeros(0), None)
-    step = step_rows(TARGETS.names, WHOLE, {"plain": plain, "end_restraint": after}, 3, 1e-4)
+    step = step_rows(TARGETS.names, WHOLE, step_models(run), 3, 1e-4)
     stats = LoopStatistics(rows, [r | dict(rmse=1e-4) for r in rows], [], candidate_rows(selection, TARGETS),
                            [no_fit] * 2, [no_fit] * 2, rmse(TARGETS.y, plain_model.prediction), step,
                            shared_runs(plain["cases"]))
@@ -135,6 +136,8 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert "The DEM horizon ends before N = 2000" in text and "runs are one for a, b (" in text
     assert "| a | - | +1 | +0.15 |" in text and "| b | - | - | +0.2 |" in text     # percent
     assert "| 0/2 | yes |" in text and "| 1/2 | - |" in text     # end_restraint's a: one case left, no interval
+    # the design sets whose tests ran apart (here every one), by their values; the plain model's ran as one
+    assert " end_restraint platen_friction 0 1 -> 3 [90 %] |" in text and " end_restraint platen_friction 1.2 1 -> 3" in text
     step = json.loads(ds.attrs["frequency_step_json"])
     assert step[0]["measured_step"] == pytest.approx(0.01) and step[0]["models"]["end_restraint"]["kept"] == 1
     plot_curves(tmp_path / "curves.png", run, stats)

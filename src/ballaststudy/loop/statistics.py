@@ -77,9 +77,22 @@ def loop_statistics(run):
                          if sel.after is not None else None),
         plain_rmse=rmse(run.targets.y, run.plain.prediction),
         step=step_rows(run.targets.names, [measured_curve(p, lp["quantity"]) for p in run.targets.measured],
-                       {"plain": run.plain.runs, **({sel.chosen: sel.after} if sel.after is not None else {})},
-                       lp["cycles"], lp["measurement_sd"]),
+                       step_models(run), lp["cycles"], lp["measurement_sd"]),
         step_shared=shared_runs(run.plain.runs["cases"]))
+
+
+def step_models(run):
+    """The ensembles the frequency-step table shows: the plain model, the chosen effect at
+    its fitted value, and every candidate's design set in which the tests' runs are not all
+    one (where f acts: a real-time effect), named by effect and parameter values."""
+    sel = run.selection
+    models = {"plain": run.plain.runs, **({sel.chosen: sel.after} if sel.after is not None else {})}
+    for name, c in sel.candidates.items():
+        for theta, st in zip(c.thetas, c.evaluate.sets):
+            if len({tuple(map(str, files)) for files in st["cases"]}) > 1:
+                models[f"{name} " + ", ".join(f"{p.name} {v:.3g}" for p, v in
+                                              zip(MODIFIERS[name].parameters, theta))] = st
+    return models
 
 
 def describe_test(name, conditions_path):
