@@ -150,11 +150,12 @@ def _step_words(run, stats):
     text = (f"Measured: the increment of {run.settings['quantity'].replace('_', ' ')} from N = {a:g} to {b:g} on "
             "the whole measured curve, interpolated in ln N (- where the curve does not reach both). Models: the "
             "plain model, the chosen effect at its fitted value, and each candidate's design set whose tests ran "
-            f"apart (f acts in it: a real-time effect); each ensemble's increment over the window its simulated cycles reach, N = {lo:g} -> {hi:g} ({a:g} -> {b:g} "
-            f"cut at the {run.settings['cycles']} cycles simulated, starting {b / a:g} times below, at least at "
-            f"N = 1; never extrapolated), with the {LEVEL * 100:g} % prediction interval of one more specimen over the "
-            "cases that did not give way, beside the measured increment over the same window. Reproduced: the "
-            "measured increment inside the interval.")
+            "apart (f acts in it: a real-time effect); each ensemble's increment over the window its simulated "
+            f"cycles reach, N = {lo:g} -> {hi:g} ({a:g} -> {b:g} cut at the {run.settings['cycles']} cycles "
+            f"simulated, starting {b / a:g} times below, at least at N = 1; never extrapolated), with the "
+            f"{LEVEL * 100:g} % prediction interval of one more specimen over the cases that did not give way, "
+            "beside the measured increment over the same window. Reproduced: the measured increment inside the "
+            "interval.")
     if hi < b:
         text += (f" The DEM horizon ends before N = {b:g}: this run can neither reproduce nor refute the step "
                  "itself; the window's columns compare what it reached.")

@@ -12,12 +12,12 @@ the default 12 cycles 1 -> 12. The measured increment over that same window stan
 it. The ensemble's interval is the 90 % prediction interval of one more specimen (the
 measured one, as residual.py judges it) over the K' cases that did not give way (a case
 that gave way has a censored curve, no increment of its own): mean +- the root of the two
-half-widths' squares, the cases' scatter's at t(0.95, K' - 1), sd (1 + 1/K')^0.5, and the two
-measured points' known sd_m's at the normal's 0.95 quantile, 2^0.5 sd_m. Why so: drawn with
-the measured specimen one more of the ensemble's kind (K' = 2-8, the measured points' sd
-0.2-3.4 x the cases'), it covered 90-96 %; t(K' - 1) on the whole covered up to 100 %, and
-Satterthwaite's degrees of freedom 83 % at K' = 2 (two close cases make them many). Reproduced: the measured
-increment over the window lies in that interval."""
+half-widths' squares, the cases' scatter's at t(0.95, K' - 1), sd (1 + 1/K')^0.5, and
+the two measured points' known sd_m's at the normal's 0.95 quantile, 2^0.5 sd_m. Why so:
+drawn with the measured specimen one more of the ensemble's kind (K' = 2-8, the measured
+points' sd 0.2-3.4 x the cases'), it covered 90-95 %; t(K' - 1) on the whole covered up to
+100 %, and Satterthwaite's degrees of freedom 83 % at K' = 2 (two close cases make them
+many). Reproduced: the measured increment over the window lies in that interval."""
 import numpy as np
 from scipy import stats
 
