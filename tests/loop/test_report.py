@@ -27,7 +27,8 @@ from ballaststudy.loop.step import shared_runs, step_rows
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402 (after the backend)
 
-SETTINGS = dict(quantity="axial_strain", cycles=3, cases=2, design_sets=2, refine_rounds=0, refine_sets=2,
+SETTINGS = dict(quantity="axial_strain", cycles=3, cases=2, effects=["end_restraint", "fouling"], design_sets=2,
+                refine_rounds=0, refine_sets=2,
                 specimen_share=1.0, measurement_sd=1e-4)
 TARGETS = Targets(["conditions/a.yaml", "conditions/b.yaml"], ["a.nc", "b.nc"],
               [(np.array([1.0, 2.0, 3.0]), np.array([0.001, 0.002, 0.0025])), (np.array([1.0, 3.0]), np.array([0.001, 0.003]))])
@@ -181,8 +182,8 @@ def test_no_effect_chosen():
 
 
 def test_no_candidate_testable(tmp_path):
-    """Every effect untestable (no target declares its covariate): the plain model alone,
-    judged and written; no candidate variables in loop.nc."""
+    """Every effect untestable (no target declares its covariate), or none given: the plain
+    model alone, judged and written; no candidate variables in loop.nc."""
     run, stats = _chosen_run()
     run = dataclasses.replace(run, selection=Selection({}, {}, untestable=["fouling"]))
     stats = dataclasses.replace(stats, after=None, candidates=[], long_term_after=None,
@@ -193,3 +194,8 @@ def test_no_candidate_testable(tmp_path):
     assert "**No effect chosen**" in text and "| fouling | - |" in text
     plot_curves(tmp_path / "curves.png", run, stats)
     assert chosen_doc(stats, {})["effect"] == "none"
+    compared_only = dataclasses.replace(run, settings=SETTINGS | dict(effects=[]),
+                                        selection=Selection({}, {}))
+    text = report_markdown(compared_only, stats)
+    assert "None given (`loop.effects` is empty): the plain model is compared only." in text
+    assert "No effect chosen" not in text and "## The frequency step" in text

@@ -104,6 +104,10 @@ def _cut_words(c):
 
 def _candidates(run, stats, scale, unit):
     cands = stats.candidates
+    if not run.settings["effects"]:
+        return ["", "## Candidate effects, judged on held-out tests", "",
+                "None given (`loop.effects` is empty): the plain model is compared only.", "",
+                f"Plain model RMSE over all points: {scale * stats.plain_rmse:.3g} {unit}.", ""]
     lines = ["", "## Candidate effects, judged on held-out tests", "",
              "Each test left out once: the effect's parameter fitted on the others, the left-out test's "
              "points predicted. Gain = sum over tests of held-out log predictive density minus the plain "
@@ -127,6 +131,8 @@ def _candidates(run, stats, scale, unit):
 
 def _verdict(run, stats, scale, unit):
     chosen = run.selection.chosen
+    if not run.settings["effects"]:
+        return []
     if not chosen:
         return ["**No effect chosen**: none beats the plain model on held-out tests consistently enough; "
                 "the model is left unchanged.", ""]
