@@ -199,3 +199,19 @@ def test_no_candidate_testable(tmp_path):
     text = report_markdown(compared_only, stats)
     assert "None given (`loop.effects` is empty): the plain model is compared only." in text
     assert "No effect chosen" not in text and "## The frequency step" in text
+
+
+def test_a_step_the_dem_reached_reproduced_everywhere():
+    """A DEM horizon of 2000 cycles: the window is the step's own (one measured column), and
+    a model that reproduces every test has its intervals' width set against the spread of
+    the measured increments (a 'yes' everywhere from an interval that spans them all)."""
+    run, stats = _chosen_run()
+    run = dataclasses.replace(run, settings=SETTINGS | dict(cycles=2000))
+    plain = dict(mean=0.02, interval90=[-0.05, 0.09], kept=3, gave_way=0, reproduced="yes")
+    step = [dict(test=name, window=[100.0, 2000.0], measured_step=m, measured_window=m, models={"plain": plain})
+            for name, m in zip(TARGETS.names, (0.01, 0.08))]
+    text = report_markdown(run, dataclasses.replace(stats, step=step))
+    assert "| test | f Hz | measured 100 -> 2000 | plain 100 -> 2000 [90 %] | gave way | reproduced |" in text
+    assert "| a | - | +1 | +2 [-5, 9] | 0/3 | yes |" in text
+    assert "plain: reproduced on all 2 tests, with intervals 14 % wide against measured increments from 1 to 8 %" in text
+    assert "The DEM horizon ends before" not in text

@@ -30,10 +30,11 @@ def _opening(run, stats, unit):
     q = lp["quantity"].replace("_", " ")
     refined = (f" + {lp['refine_rounds']} x {lp['refine_sets']} refined around the held-out posteriors"
                if lp["refine_rounds"] else "")
+    effects = (f"{len(stats.candidates)} candidate effects at {lp['design_sets']} parameter sets each{refined}"
+               if stats.candidates else "no candidate effect run")
     return ["# Closing the loop with measured data", "",
             f"{len(stats.before)} tests, {lp['cases']} specimens per model and test, {lp['cycles']} simulated cycles "
-            f"(the DEM horizon); {len(stats.candidates)} candidate effects at {lp['design_sets']} parameter sets each"
-            f"{refined}; "
+            f"(the DEM horizon); {effects}; "
             f"{run.dem_cases} DEM cases, {run.dem_runs} runs from {run.dem_first_loadings} first loadings (a case "
             "that differs from another only in what does not act, a quasi-static test's f, is the other's run; "
             "one that differs only in what the first loading does not read, a real-time test's f, or in "
@@ -147,11 +148,12 @@ def _step(run, stats, scale, unit):
     """The frequency step side by side: measured over STEP_CYCLES and over the model's
     window, each model's increment there with its interval and verdict."""
     a, b = STEP_CYCLES
-    return ([f"## The frequency step: the increment from N = {a:g} to {b:g}, per test", "", _step_words(run, stats)]
+    return ([f"## The frequency step: the increment from N = {a:g} to {b:g}, per test", "",
+             _step_words(run, stats, scale, unit)]
             + _step_table(stats, scale) + ["", f"Increments in {unit}.", ""])
 
 
-def _step_words(run, stats):
+def _step_words(run, stats, scale, unit):
     (lo, hi), (a, b) = stats.step[0]["window"], STEP_CYCLES
     text = (f"Measured: the increment of {run.settings['quantity'].replace('_', ' ')} from N = {a:g} to {b:g} on "
             "the whole measured curve, interpolated in ln N (- where the curve does not reach both). Models: the "
@@ -165,22 +167,37 @@ def _step_words(run, stats):
     if hi < b:
         text += (f" The DEM horizon ends before N = {b:g}: this run can neither reproduce nor refute the step "
                  "itself; the window's columns compare what it reached.")
+    text += "".join(_spans_all(m, stats.step, scale, unit) for m in stats.step[0]["models"])
     names = run.targets.names
     return text + "".join(f" The plain model's runs are one for {', '.join(names[j] for j in g)} (the tests "
                           "differ only in what does not act in it, a quasi-static run's f): its increments there "
                           "are one by construction." for g in stats.step_shared)
 
 
+def _spans_all(model, rows, scale, unit):
+    """Where a model reproduces every test: how wide its intervals are against the spread of
+    the measured increments, so that a 'yes' everywhere is read for what it is."""
+    incs = [r["models"][model] for r in rows]
+    if len(rows) < 2 or any(i["reproduced"] != "yes" for i in incs):
+        return ""
+    measured = [r["measured_window"] for r in rows]
+    widths = [i["interval90"][1] - i["interval90"][0] for i in incs]
+    lo, hi = f"{scale * min(widths):.3g}", f"{scale * max(widths):.3g}"
+    return (f" {model}: reproduced on all {len(rows)} tests, with intervals {lo if lo == hi else f'{lo}-{hi}'} "
+            f"{unit} wide against measured increments from {scale * min(measured):.3g} to "
+            f"{scale * max(measured):.3g} {unit} across the tests.")
+
+
 def _step_table(stats, scale):
     (lo, hi), (a, b) = stats.step[0]["window"], STEP_CYCLES
-    models = list(stats.step[0]["models"])
-    head = f"| test | f Hz | measured {a:g} -> {b:g} | measured {lo:g} -> {hi:g} |" + "".join(
+    models, reached = list(stats.step[0]["models"]), (lo, hi) == (a, b)
+    head = f"| test | f Hz | measured {a:g} -> {b:g} |" + ("" if reached else f" measured {lo:g} -> {hi:g} |") + "".join(
         f" {m} {lo:g} -> {hi:g} [{LEVEL * 100:g} %] | gave way | reproduced |" for m in models)
-    lines = ["", head, "|---|---|---|---|" + "---|---|---|" * len(models)]
+    lines = ["", head, "|---|---|---|" + ("" if reached else "---|") + "---|---|---|" * len(models)]
     for r, before in zip(stats.step, stats.before):
         f = before.get("frequency_Hz")
-        row = (f"| {r['test']} | {'-' if f is None else f'{f:g}'} | {_signed(scale * r['measured_step'])} | "
-               f"{_signed(scale * r['measured_window'])} |")
+        row = (f"| {r['test']} | {'-' if f is None else f'{f:g}'} | {_signed(scale * r['measured_step'])} |"
+               + ("" if reached else f" {_signed(scale * r['measured_window'])} |"))
         for m in models:
             inc = r["models"][m]
             ilo, ihi = (scale * x for x in inc["interval90"])
