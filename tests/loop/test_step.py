@@ -57,7 +57,7 @@ def test_the_interval_covers_one_more_specimen_at_its_level(cases, sd_m):
     cases' increments over 1 -> 12 scatter by 1.2e-3; two measured points with an sd sd_m
     each): over 4000 draws it lies inside the 90 % interval 90-95 % of the time (binomial
     sd 0.5 %); it errs on the safe side at few cases. Half its width covers 62-81 %, the
-    measured points' sd left out 77-91 % (at sd_m 1e-3 caught), twice the width 99-100 %
+    measured points' sd left out 77-91 % (at sd_m 1e-3 caught), twice the width 98.5-100 %
     from three cases on but 96 % at two: t(1)'s tails leave coverage a weak lever there."""
     rng = np.random.default_rng(7)
     n = np.arange(1.0, 13.0)
