@@ -89,7 +89,7 @@ def step_models(run):
     models = {"plain": run.plain.runs, **({sel.chosen: sel.after} if sel.after is not None else {})}
     for name, c in sel.candidates.items():
         for theta, st in zip(c.thetas, c.evaluate.sets):
-            if len({tuple(map(str, files)) for files in st["cases"]}) > 1:
+            if shared_runs(st["cases"]) != [list(range(len(st["cases"])))]:
                 models[f"{name} " + ", ".join(f"{p.name} {v:.3g}" for p, v in
                                               zip(MODIFIERS[name].parameters, theta))] = st
     return models
