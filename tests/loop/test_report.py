@@ -179,6 +179,9 @@ def test_no_effect_chosen():
                                               "material_parameters": {"mu": 0.5}, "stress_mapping": "none"}
     assert "after" not in loop_dataset(run, stats) and "**No effect chosen**" in report_markdown(run, stats)
     assert "end_restraint 1 -> 3" not in report_markdown(run, stats)
+    text = report_markdown(run, stats).split("## DEM horizon")[1].split("\n\n")[2]   # its table
+    rows = text.splitlines()[2:]
+    assert len(rows) == 2 and all(line.split(" | ")[6] == "-" for line in rows), rows      # not nan
 
 
 def test_no_candidate_testable(tmp_path):

@@ -48,12 +48,13 @@ def _dem_horizon(stats, scale):
              "Residual = measured - ensemble mean at the measured points (N <= the simulated cycles). "
              "Bias and slope (per unit ln N) are judged as one more specimen of the ensemble (p: two-sided "
              "prediction test; K - 1 degrees of freedom).", "",
-             "| test | p kPa | f Hz | VCI % | points | RMSE before | RMSE after (fitted) | bias (p) | slope ln N (p) |",
+             "| test | p kPa | f Hz | VCI % | points | RMSE before | RMSE after (chosen effect, fitted; - none) | bias (p) "
+             "| slope ln N (p) |",
              "|---|---|---|---|---|---|---|---|---|"]
     for j, r in enumerate(stats.before):
-        a = stats.after[j]["rmse"] * scale if stats.after else float("nan")
+        after = f"{stats.after[j]['rmse'] * scale:.3g}" if stats.after else "-"     # "-": no effect chosen
         lines.append(f"| {r['test']} | {r.get('confining_pressure_kPa', float('nan')):g} | {r.get('frequency_Hz', float('nan')):g} | "
-                     f"{r.get('VCI', 0):g} | {r['points']} | {scale * r['rmse']:.3g} | {a:.3g} | "
+                     f"{r.get('VCI', 0):g} | {r['points']} | {scale * r['rmse']:.3g} | {after} | "
                      f"{scale * r['bias']:.3g} ({_fmt_p(r['bias_p'])}) | {scale * r['slope_ln_n']:.3g} ({_fmt_p(r['slope_p'])}) |")
     return lines
 
