@@ -6,6 +6,8 @@ import time
 
 from snakemake.utils import min_version, validate
 
+from ballaststudy.scenario.scenario import check_stone_model
+
 from ballaststudy.config import ConfigError, check_domain, database_seed, validate as validate_file, form_params, load_databases, load_yaml, select_databases, unknown_set_databases
 
 min_version("8.0")
@@ -36,6 +38,7 @@ configfile: "config/config.yaml"
 # our one-line message first, then Snakemake's own validation against the same schema
 try:
     check_domain(validate_file(config, "config", CONFIG_FILE), CONFIG_FILE)
+    check_stone_model(config, CONFIG_FILE)
     DATABASES = load_databases(config["databases_file"], form_params(config))
     NAMES = select_databases(config, DATABASES, CONFIG_FILE)
     for note in unknown_set_databases(config, DATABASES):

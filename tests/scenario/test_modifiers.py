@@ -31,9 +31,7 @@ from ballaststudy.scenario.modifiers import EFFECTS, MODIFIERS, covariate
 from ballaststudy.scenario.modifiers.abrasion import strong_balls, wear
 from ballaststudy.rig.biaxial import MEMBRANE, PLATEN, BiaxialParams, BiaxialRig, BiaxialRun
 
-from ..biaxial_fast import FAST_LOADING
 
-ROOT = Path(__file__).resolve().parents[2]
 STONES = (0, 1)
 MU, BETA = "mu", "beta_n"
 
@@ -47,23 +45,6 @@ def _conditions(folder, name="t", frequency_Hz=20.0, **extra):
             file="a.dat", quantity="axial_strain", units="1", sign="compression_positive")],
         **extra)))
     return path
-
-
-@pytest.fixture(scope="module")
-def setup(small_library, tmp_path_factory):
-    """(assembled specimen, config, folder): the shipped config with 1000-step windows."""
-    from ballaststudy.cli import main
-    folder = tmp_path_factory.mktemp("effects")
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
-    config = folder / "config.yaml"
-    config.write_text(yaml.safe_dump(cfg))
-    asm = folder / "assembled.nc"
-    assert main(["case", "assemble", str(small_library), "--case", "0", "--rig", "biaxial",
-                 "--width-m", "0.12", "--height-m", "0.24", "--config", str(config),
-                 "--out", str(asm), "--quiet"]) == 0
-    return asm, config, folder
 
 
 def _rig(setup, conditions):

@@ -40,6 +40,7 @@ rule parametric_run:
     params:
         loading=trigger("rig.box.loading"),
         metrics=trigger("metrics"),
+        stones=trigger("stone_model"),   # the stone model: rerun the loading
         cycles=PARAM_CYCLES,
         config=CONFIG_FILE,
     log:

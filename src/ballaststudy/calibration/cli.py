@@ -31,6 +31,7 @@ from ..rig.kinds import RUNS_TESTS, kind_for_test, kind_of, rig_classes
 from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import MATERIAL, MODIFIERS, material_parameter
 from ..scenario.runner import BACKENDS, check_backend
+from ..scenario.scenario import check_stone_model
 from .bayes import calibrate, rmse
 from .evaluate import Evaluator
 from .parametric import (DESIGN, cases_per_value, findings, parametric_dataset, plot_parameter,
@@ -183,6 +184,7 @@ def _calibrate(args):
     check_backend(args.backend)
     out = writable_dir(args.out_dir)
     cfg = load_config(args.config)
+    check_stone_model(cfg, args.config, args.backend, stages=("calibration.parameters",))
     cal = cfg["calibration"]
     measured, kind = checked_targets(args, cal, "calibration")
     points = np.concatenate([n for n, _ in measured])

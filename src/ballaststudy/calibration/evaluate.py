@@ -17,6 +17,7 @@ from ..scenario.modifiers import material_modifiers
 from ..scenario.results import at_points, case_curve
 from ..scenario.runner import cached_case, run_cases, without_hook_only
 from ..scenario.scenario import conditioned_rig, scenario
+from ..stones import DEFAULT
 
 
 class Evaluator:
@@ -48,6 +49,7 @@ class Evaluator:
         # edited meanwhile changes nothing
         cfg = config if isinstance(config, dict) else load_config(config)
         self.metrics = cfg.get("metrics")
+        self.stone_model = cfg.get("stone_model", DEFAULT)
         self.tests = []
         for conditions, points in tests:
             loaded = load_conditions(conditions)
@@ -69,7 +71,7 @@ class Evaluator:
             modifiers = material_modifiers({**self.base, **values})
         return [scenario(self.kind, self.specimens, t["rig"], self.cycles, modifiers, t["loaded"],
                          t["conditions"], self.metrics, self.perturbation_m_s, self.perturbation_seed,
-                         t["mapping"])
+                         t["mapping"], self.stone_model)
                 for t in self.tests]
 
     def mapping_records(self):

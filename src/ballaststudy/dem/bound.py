@@ -14,7 +14,7 @@ from numba import njit
 
 from .contacts import pair_elastic_energy
 from .engine import run_steps
-from .integrate import ball_springs, critical_dt
+from .integrate import ball_springs, clump_springs, critical_dt
 from .walls import wall_elastic_energy
 
 
@@ -29,8 +29,8 @@ def stepper(law):
 @lru_cache(maxsize=None)
 def timestep(law):
     @njit(cache=True)
-    def bound(run, balls, pr, wp, wmat, bonds):
-        return critical_dt(law, run, balls, pr, wp, wmat, bonds)
+    def bound(run, balls, clumps, pr, wp, walls, bonds):
+        return critical_dt(law, run, balls, clumps, pr, wp, walls, bonds)
     return bound
 
 
@@ -48,4 +48,12 @@ def elastic_energy(law):
     def bound(run, balls, kin, pr, b_active, walls, wp):
         return (pair_elastic_energy(law, run, balls, pr, b_active)
                 + wall_elastic_energy(law, run, kin, walls, wp))
+    return bound
+
+
+@lru_cache(maxsize=None)
+def clump_stiffness(law):
+    @njit(cache=True)
+    def bound(run, balls, clumps, pr, wp, walls, bonds):
+        return clump_springs(law, run, balls, clumps, pr, wp, walls, bonds)
     return bound

@@ -108,7 +108,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
                 balls.pos[i, 1] = kin[i, 1]
             pr, wp = rebuild_lists(run, balls, walls, pr, wp, bonds)
             if prm[P.AUTO_DT] > 0.0 or prm[P.DSCALE] > 0.0:
-                dtc = critical_dt(law, run, balls, pr, wp, walls.mat, bonds)
+                dtc = critical_dt(law, run, balls, clumps, pr, wp, walls, bonds)
                 for i in range(n):
                     kin[i, 6] = balls.minv[i]     # density scaling may have changed it
                 if prm[P.AUTO_DT] > 0.0 and dtc < 1.0e30:

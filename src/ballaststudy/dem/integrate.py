@@ -15,6 +15,7 @@ from numba import njit
 
 from . import params as P
 from .jit import NO_NRT
+from .neighbours import seg_closest
 from .submodels import coefficient_row, contact_stiffness
 
 
@@ -147,9 +148,9 @@ def clumps_kick_drift(clumps, h, dt):
     """First half of a step for the clumps (held ones keep their velocity)."""
     for c in range(clumps.pos.shape[0]):
         if not clumps.held[c]:
-            clumps.vel[c, 0] += h * clumps.force[c, 0] / clumps.mass[c]
-            clumps.vel[c, 1] += h * clumps.force[c, 1] / clumps.mass[c]
-            clumps.omega[c] += h * clumps.moment[c] / clumps.inertia[c]
+            clumps.vel[c, 0] += h * clumps.force[c, 0] / clumps.imass[c]
+            clumps.vel[c, 1] += h * clumps.force[c, 1] / clumps.imass[c]
+            clumps.omega[c] += h * clumps.moment[c] / clumps.iinertia[c]
         clumps.pos[c, 0] += dt * clumps.vel[c, 0]
         clumps.pos[c, 1] += dt * clumps.vel[c, 1]
         clumps.theta[c] += dt * clumps.omega[c]
@@ -240,9 +241,9 @@ def clumps_damp_kick(clumps, h, dt):
             cforce[c, 0] = fx
             cforce[c, 1] = fy
             cmoment[c] = mz
-        cvel[c, 0] += h * cforce[c, 0] / clumps.mass[c]
-        cvel[c, 1] += h * cforce[c, 1] / clumps.mass[c]
-        comega[c] += h * cmoment[c] / clumps.inertia[c]
+        cvel[c, 0] += h * cforce[c, 0] / clumps.imass[c]
+        cvel[c, 1] += h * cforce[c, 1] / clumps.imass[c]
+        comega[c] += h * cmoment[c] / clumps.iinertia[c]
     return el
 
 
@@ -341,25 +342,136 @@ def ball_springs(law, run, balls, pr, wp, wmat, bonds):
     return ktr, krot
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _add_clump_spring(balls, clumps, i, nx, ny, kn, ks, kr, ctr, crot):
+    """One contact of pebble i (unit normal (nx, ny) out of it) into its clump's k_tr and
+    k_rot. A turn of the clump about its centre of mass moves the contact point d = r_i +
+    R_i n (r_i: the pebble's centre from the clump's) by d x dtheta: across the normal
+    spring by cross(d, n) and along the shear spring by d . n, so k_rot gains
+    k_n cross(r_i, n)^2 + k_s (r_i . n + R_i)^2 + k_r (for r_i = 0 the ball's k_s R^2 + k_r)."""
+    c = balls.clump[i]
+    rx = balls.pos[i, 0] - clumps.pos[c, 0]
+    ry = balls.pos[i, 1] - clumps.pos[c, 1]
+    cr = rx * ny - ry * nx
+    dn = rx * nx + ry * ny + balls.rad[i]
+    ctr[c] += kn + ks
+    crot[c] += kn * cr * cr + ks * dn * dn + kr
+
+
 @njit(cache=True, error_model="numpy")
-def critical_dt(law, run, balls, pr, wp, wmat, bonds):
-    """dt_crit = min_i min(sqrt(m_i/k_tr), sqrt(I_i/k_rot)) (ball_springs).
-    With density scaling, inertial masses are raised to k_tr*(dt/f)^2 instead (never
-    lowered below the real mass: PFC scales both ways; we only add inertia)."""
+def clump_springs(law, run, balls, clumps, pr, wp, walls, bonds):
+    """(k_tr, k_rot) of every clump over its pebbles' pairs in the Verlet lists (touching
+    or about to touch, at their geometry now: the ball rule's convention): k_tr sums k_n +
+    k_s, k_rot sums each contact's stiffness against a turn about the centre of mass
+    (_add_clump_spring). One pebble's springs against the whole clump's mass (the rule
+    before) overestimated the clump's dt_crit. A flat joint left between two fragments
+    (partly broken in the assembly: make_clumps keeps it) counts as in ball_springs, its
+    bending stiffness with the rolling one."""
+    prm = run.prm
+    rad = balls.rad
+    mat = balls.mat
+    pos = balls.pos
+    t = prm[P.THICK]
+    nc = clumps.pos.shape[0]
+    ctr = np.zeros(nc)
+    crot = np.zeros(nc)
+    for p in range(pr.n[0]):
+        i = pr.i[p]
+        j = pr.j[p]
+        if balls.clump[i] < 0 and balls.clump[j] < 0:
+            continue
+        kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, mat[i], mat[j]),
+                                       rad[i], rad[j], t)
+        dx = pos[j, 0] - pos[i, 0]
+        dy = pos[j, 1] - pos[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        if d == 0.0:
+            continue
+        if balls.clump[i] >= 0:
+            _add_clump_spring(balls, clumps, i, dx / d, dy / d, kn, ks, kr, ctr, crot)
+        if balls.clump[j] >= 0:
+            _add_clump_spring(balls, clumps, j, -dx / d, -dy / d, kn, ks, kr, ctr, crot)
+    skin = prm[P.SKIN]
+    for b in range(bonds.i.shape[0]):      # a joint left between two fragments (assembly)
+        i = bonds.i[b]
+        j = bonds.j[b]
+        if not bonds.active[b] or (balls.clump[i] < 0 and balls.clump[j] < 0):
+            continue
+        dx = pos[j, 0] - pos[i, 0]
+        dy = pos[j, 1] - pos[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        if d == 0.0:
+            continue
+        a = 2.0 * bonds.rbar[b] * t
+        kn = bonds.kn[b] * a
+        ks = bonds.ks[b] * a
+        kb = bonds.kn[b] * t * (2.0 * bonds.rbar[b]) ** 3 / 12.0
+        if _within_skin(balls.pos0, rad, i, j, skin):     # as ball_springs: its contact too
+            cn, cs, cr = contact_stiffness(law, coefficient_row(run.coef, mat[i], mat[j]),
+                                           rad[i], rad[j], t)
+            kn += cn
+            ks += cs
+            kb += cr
+        if balls.clump[i] >= 0:
+            _add_clump_spring(balls, clumps, i, dx / d, dy / d, kn, ks, kb, ctr, crot)
+        if balls.clump[j] >= 0:
+            _add_clump_spring(balls, clumps, j, -dx / d, -dy / d, kn, ks, kb, ctr, crot)
+    seg = walls.seg
+    for q in range(wp.n[0]):
+        i = wp.i[q]
+        if balls.clump[i] < 0:
+            continue
+        s = wp.s[q]
+        kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, walls.mat[s], mat[i]),
+                                       0.0, rad[i], t)
+        cx, cy, _ = seg_closest(pos[i, 0], pos[i, 1], seg[s, 0], seg[s, 1], seg[s, 2], seg[s, 3])
+        dx = cx - pos[i, 0]
+        dy = cy - pos[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        if d == 0.0:
+            continue
+        _add_clump_spring(balls, clumps, i, dx / d, dy / d, kn, ks, kr, ctr, crot)
+    return ctr, crot
+
+
+@njit(cache=True, error_model="numpy")
+def critical_dt(law, run, balls, clumps, pr, wp, walls, bonds):
+    """dt_crit = min(sqrt(m/k_tr), sqrt(I/k_rot)) over the free balls (ball_springs) and
+    the free clumps (clump_springs, about the centre of mass; held clumps move as told).
+    With density scaling, inertial masses (and moments) of balls and free clumps are
+    raised to k_tr*(dt/f)^2 instead (never lowered below the real ones: PFC scales both
+    ways; we only add inertia); a pebble's dashpot sees its clump's inertial mass."""
     numba.literally(law)
     prm = run.prm
     n = balls.rad.shape[0]
-    ktr, krot = ball_springs(law, run, balls, pr, wp, wmat, bonds)
+    ktr, krot = ball_springs(law, run, balls, pr, wp, walls.mat, bonds)
     f = prm[P.DT_SAFETY]
+    s2 = (prm[P.DT] / f) ** 2
+    scaled = prm[P.DSCALE] > 0.0
     dtc = 1.0e30
     for i in range(n):
-        if not balls.alive[i] or ktr[i] == 0.0:
+        if not balls.alive[i] or ktr[i] == 0.0 or balls.clump[i] >= 0:
             continue
-        if prm[P.DSCALE] > 0.0 and balls.clump[i] < 0:
-            s2 = (prm[P.DT] / f) ** 2
+        if scaled:
             balls.minv[i] = 1.0 / max(balls.mass[i], ktr[i] * s2)
             balls.iinv[i] = 1.0 / max(balls.inertia[i], krot[i] * s2)
         dtc = min(dtc, math.sqrt(1.0 / (balls.minv[i] * ktr[i])))
         if krot[i] > 0.0:
             dtc = min(dtc, math.sqrt(1.0 / (balls.iinv[i] * krot[i])))
+    if clumps.pos.shape[0] == 0:
+        return dtc
+    ctr, crot = clump_springs(law, run, balls, clumps, pr, wp, walls, bonds)
+    for c in range(clumps.pos.shape[0]):
+        if clumps.held[c] or ctr[c] == 0.0:
+            continue
+        if scaled:
+            clumps.imass[c] = max(clumps.mass[c], ctr[c] * s2)
+            clumps.iinertia[c] = max(clumps.inertia[c], crot[c] * s2)
+        dtc = min(dtc, math.sqrt(clumps.imass[c] / ctr[c]))
+        dtc = min(dtc, math.sqrt(clumps.iinertia[c] / crot[c]))
+    if scaled:
+        for i in range(n):
+            c = balls.clump[i]
+            if c >= 0:
+                balls.minv[i] = 1.0 / clumps.imass[c]
     return dtc

@@ -20,7 +20,7 @@ from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
 from .clumps import mass_properties
 from .control import Control
-from .bound import springs, stepper, timestep
+from .bound import clump_stiffness, springs, stepper, timestep
 from .engine import rebuild_lists
 from .integrate import reset_forces
 from .law import ContactLaw
@@ -226,6 +226,45 @@ class Simulation:
         self.balls.pos0[ids] = self.balls.pos[ids]
         return cid
 
+    def make_clumps(self, groups):
+        """Each group of live free balls (ball ids) becomes one free rigid clump of those
+        balls as its pebbles, in place (ids, stones, materials, contacts and their history
+        kept): mass properties from pebble sums of the balls' masses (clumps.py); the group's linear and angular
+        momentum kept exactly (v = sum m v / M, omega = L_c / I_c), which is the rigid
+        motion of least kinetic energy with that momentum, so none is added. Bonds among a
+        group's balls become inactive (a rigid body has no internal springs) and stay in
+        the bond arrays as the record of which balls were joined. Returns the clump ids."""
+        b = self.balls
+        ids = []
+        for g in groups:
+            g = np.asarray(g, np.int64)
+            if len(g) == 0 or not (b.alive[g] == 1).all() or (b.clump[g] >= 0).any():
+                raise ValueError("make_clumps: every group must be non-empty live free balls")
+            mi, x, y = b.mass[g], b.pos[g, 0], b.pos[g, 1]
+            m = mi.sum()                  # as mass_properties, on the balls' own masses
+            cx = (mi * x).sum() / m
+            cy = (mi * y).sum() / m
+            inertia = (b.inertia[g] + mi * ((x - cx) ** 2 + (y - cy) ** 2)).sum()
+            d = np.column_stack([x - cx, y - cy])
+            v = np.array([(mi * b.vel[g, 0]).sum(), (mi * b.vel[g, 1]).sum()]) / m
+            spin = (b.inertia[g] * b.omega[g]
+                    + mi * (d[:, 0] * b.vel[g, 1] - d[:, 1] * b.vel[g, 0])).sum()
+            w = spin / inertia
+            cid = self.clumps.append(pos=(cx, cy), vel=v, omega=w, mass=m, inertia=inertia,
+                                     held=0, damp=float(b.damp[g[0]]))
+            b.clump[g] = cid
+            b.offset[g] = d
+            b.pos[g] = (cx, cy) + d       # as placed from now on (round-off)
+            b.minv[g] = 1.0 / m           # dashpot effective mass = clump mass
+            b.vel[g] = v + w * np.column_stack([-d[:, 1], d[:, 0]])
+            b.omega[g] = w
+            ids.append(cid)
+        bd = self.bonds
+        inner = (b.clump[bd.i] >= 0) & (b.clump[bd.i] == b.clump[bd.j])
+        bd.active[inner] = 0      # kept in the arrays: which balls were joined
+        self._touch()
+        return ids
+
     def set_clump_velocity(self, cid, vel=None, omega=None, held=None):
         if vel is not None:
             self.clumps.vel[cid] = vel
@@ -245,11 +284,28 @@ class Simulation:
 
     def perturb_velocities(self, sd, seed):
         """Add a normal draw of standard deviation ``sd`` [m/s] to each velocity component
-        of every live free ball (not a clump's pebble, none held): an infinitesimal change
-        of the state, to measure how far chaos alone carries a run (loop.select)."""
-        b = self.balls
+        of every live free ball (none held) and then of every free clump of stone balls
+        (rigid stones; not a plate or loading body), its pebbles moved with it: an
+        infinitesimal change of the state, to measure how far chaos alone carries a run
+        (loop.select)."""
+        b, c = self.balls, self.clumps
+        rng = np.random.default_rng(seed)
         free = np.flatnonzero((b.alive == 1) & (b.clump < 0) & (b.fix == 0))
-        b.vel[free] += np.random.default_rng(seed).normal(0.0, sd, (free.size, 2))
+        b.vel[free] += rng.normal(0.0, sd, (free.size, 2))
+        stone = np.zeros(len(c), bool)
+        stone[b.clump[(b.clump >= 0) & (b.stone >= 0) & (b.alive == 1)]] = True
+        rigid = np.flatnonzero(stone & (c.held == 0))
+        if rigid.size:
+            c.vel[rigid] += rng.normal(0.0, sd, (rigid.size, 2))
+            peb = np.isin(b.clump, rigid)
+            b.vel[peb] = c.vel[b.clump[peb]] + self._spin_velocity(peb)
+
+    def _spin_velocity(self, peb):
+        """omega x r of the pebbles ``peb`` (bool) about their clumps' centres, as placed."""
+        b, c = self.balls, self.clumps
+        w = c.omega[b.clump[peb]]
+        r = b.pos[peb] - c.pos[b.clump[peb]]
+        return np.column_stack([-w * r[:, 1], w * r[:, 0]])
 
     def apply_force(self, ids, f):
         """Constant external force on balls ``ids`` (pebbles: passed to their clump) until
@@ -366,7 +422,7 @@ class Simulation:
 
     def set_density_scaling(self, dt=None):
         """Fixed timestep ``dt`` with density scaling: at every neighbour rebuild each free
-        ball's inertial mass (and moment) is raised so that ``dt`` is stable, while gravity
+        ball's and free clump's inertial mass (and moment) is raised so that ``dt`` is stable, while gravity
         acts on the real mass. ``None``: back to the automatic critical timestep and the
         real inertial masses."""
         p, b = self.prm, self.balls
@@ -376,6 +432,11 @@ class Simulation:
             free = b.clump < 0
             b.minv[free] = 1.0 / b.mass[free]
             b.iinv[free] = 1.0 / b.inertia[free]
+            c = self.clumps
+            c.imass[:] = c.mass
+            c.iinertia[:] = c.inertia
+            peb = ~free
+            b.minv[peb] = 1.0 / c.mass[b.clump[peb]]
         else:
             p[P.DT] = float(dt)
             p[P.AUTO_DT] = 0.0
@@ -475,58 +536,76 @@ class Simulation:
         return float(np.sqrt(b.mass[live].min() / k / 2.0))
 
     def critical_dt(self):
-        """min sqrt(m/k_tr) and sqrt(I/k_rot) over the current Verlet lists and bonds."""
+        """min sqrt(m/k_tr) and sqrt(I/k_rot) over the free balls and free clumps, from the
+        current Verlet lists and bonds (integrate.critical_dt)."""
         return timestep(self._layout)(self._run_state(), self.balls.kernel(),
-                                      self.pairs.kernel(), self.wpairs.kernel(),
-                                      self.walls.mat, self.bonds.kernel())
+                                      self.clumps.kernel(), self.pairs.kernel(),
+                                      self.wpairs.kernel(), self.walls.kernel(), self.bonds.kernel())
+
+    def _body_springs(self):
+        """The free bodies' springs as critical_dt sums them: (kind, id, mass, inertia,
+        inertial mass, inertial moment, k_tr, k_rot) arrays over the live free balls with
+        springs, then the free clumps with springs (kind 0 ball, 1 clump)."""
+        self.prepare()
+        ktr, krot = springs(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
+                                          self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
+        b, c = self.balls, self.clumps
+        ball = np.flatnonzero((b.alive == 1) & (b.clump < 0) & (ktr > 0.0))
+        ctr, crot = clump_stiffness(self._layout)(self._run_state(), b.kernel(), c.kernel(),
+                                                  self.pairs.kernel(), self.wpairs.kernel(),
+                                                  self.walls.kernel(), self.bonds.kernel())
+        clump = np.flatnonzero((c.held == 0) & (ctr > 0.0))
+        cat = np.concatenate
+        return (cat([np.zeros(len(ball), int), np.ones(len(clump), int)]), cat([ball, clump]),
+                cat([b.mass[ball], c.mass[clump]]), cat([b.inertia[ball], c.inertia[clump]]),
+                cat([1.0 / b.minv[ball], c.imass[clump]]), cat([1.0 / b.iinv[ball], c.iinertia[clump]]),
+                cat([ktr[ball], ctr[clump]]), cat([krot[ball], crot[clump]]))
 
     def timestep_limit(self):
-        """What sets dt_crit: the limiting ball (id, radius [m], mass [kg], "translation"
-        or "rotation", its bonds) and the per-ball dt_crit's percentiles (1, 10, 50) [s],
-        from the springs critical_dt sums (the current Verlet lists and bonds), with the
-        inertia the balls have now (density scaling included)."""
-        ktr, krot = self._ball_springs()
-        b = self.balls
-        ok = (b.alive == 1) & (ktr > 0.0)
+        """What sets dt_crit: the limiting body ("ball" or "clump", its id, its largest
+        radius [m], mass [kg], "translation" or "rotation", the bonds of a ball) and the
+        per-body dt_crit's percentiles (1, 10, 50) [s], from the springs critical_dt sums
+        (the current Verlet lists and bonds), with the inertia the bodies have now
+        (density scaling included)."""
+        kind, ids, _, _, im, ii, ktr, krot = self._body_springs()
         with np.errstate(divide="ignore"):
-            dt_tr = np.where(ok, np.sqrt(1.0 / (b.minv * np.where(ok, ktr, 1.0))), np.inf)
-            dt_rot = np.where(ok & (krot > 0.0), np.sqrt(1.0 / (b.iinv * np.where(krot > 0, krot, 1.0))), np.inf)
-        per_ball = np.minimum(dt_tr, dt_rot)
-        i = int(np.argmin(per_ball))
+            dt_tr = np.sqrt(im / ktr)
+            dt_rot = np.where(krot > 0.0, np.sqrt(ii / np.where(krot > 0, krot, 1.0)), np.inf)
+        per_body = np.minimum(dt_tr, dt_rot)
+        k = int(np.argmin(per_body))
+        i, b = int(ids[k]), self.balls
         active = self.bonds.active == 1
-        return dict(ball=i, radius=float(b.rad[i]), mass=float(b.mass[i]),
-                    springs="rotation" if dt_rot[i] < dt_tr[i] else "translation",
-                    bonds=int(np.sum(self.bonds.i[active] == i) + np.sum(self.bonds.j[active] == i)),
-                    dt_crit=float(per_ball[i]),
-                    percentiles=[float(v) for v in np.percentile(per_ball[ok], [1, 10, 50])])
-
-    def _ball_springs(self):
-        """Each ball's summed translational and rotational springs (integrate.ball_springs,
-        the current Verlet lists and bonds)."""
-        self.prepare()
-        return springs(self._layout)(self._run_state(), self.balls.kernel(), self.pairs.kernel(),
-                                     self.wpairs.kernel(), self.walls.mat, self.bonds.kernel())
+        if kind[k] == 0:
+            what = dict(body="ball", ball=i, radius=float(b.rad[i]), mass=float(b.mass[i]),
+                        bonds=int(np.sum(self.bonds.i[active] == i) + np.sum(self.bonds.j[active] == i)))
+        else:
+            peb = (b.clump == i) & (b.alive == 1)
+            what = dict(body="clump", clump=i, radius=float(b.rad[peb].max()),
+                        mass=float(self.clumps.mass[i]), pebbles=int(peb.sum()))
+        return dict(what, springs="rotation" if dt_rot[k] < dt_tr[k] else "translation",
+                    dt_crit=float(per_body[k]),
+                    percentiles=[float(v) for v in np.percentile(per_body, [1, 10, 50])])
 
     def added_inertia(self):
-        """The inertial mass density scaling adds to the free balls now, as a fraction of
-        their real mass (0 without density scaling)."""
-        b = self.balls
+        """The inertial mass density scaling adds to the free bodies (balls and clumps)
+        now, as a fraction of their real mass (0 without density scaling)."""
+        b, c = self.balls, self.clumps
         free = (b.alive == 1) & (b.clump < 0)
-        return float((1.0 / b.minv[free]).sum() / b.mass[free].sum() - 1.0) if free.any() else 0.0
+        loose = c.held == 0
+        real = b.mass[free].sum() + c.mass[loose].sum()
+        inertial = (1.0 / b.minv[free]).sum() + c.imass[loose].sum()
+        return float(inertial / real - 1.0) if real > 0 else 0.0
 
     def scaled_timestep(self, added_inertia_max):
         """The largest fixed dt whose density scaling (``set_density_scaling``) adds at most
-        ``added_inertia_max`` x the free balls' real mass to their inertial mass, and as
-        much of their moment of inertia: density scaling raises only the balls whose own
+        ``added_inertia_max`` x the free bodies' real mass to their inertial mass, and as
+        much of their moment of inertia: density scaling raises only the bodies whose own
         dt_crit is below dt / f (the few smallest, an artefact of the ball model), so a
-        small added fraction buys much of the dt that the typical ball allows. At least
-        the automatic dt (no inertia added). Reads the current contacts: call it on the
-        specimen as it is loaded."""
-        ktr, krot = self._ball_springs()
-        b = self.balls
-        ok = (b.alive == 1) & (ktr > 0.0) & (b.clump < 0)
+        small added fraction buys much of the dt that the typical body allows. Free balls
+        and free clumps (rigid stones) alike. At least the automatic dt (no inertia
+        added). Reads the current contacts: call it on the specimen as it is loaded."""
+        _, _, m, inertia, _, _, kt, kr = self._body_springs()
         f = float(self.prm[P.DT_SAFETY])
-        m, inertia, kt, kr = b.mass[ok], b.inertia[ok], ktr[ok], krot[ok]
 
         def added(dt):
             s2 = (dt / f) ** 2

@@ -109,7 +109,9 @@ class Walls(_Arrays):
 @dataclass
 class Clumps(_Arrays):
     """Rigid bodies of pebbles (pebbles are balls with ``Balls.clump`` = id).
-    ``held`` clumps keep the velocity the caller sets (PFC plate)."""
+    ``held`` clumps keep the velocity the caller sets (PFC plate). ``mass``/``inertia`` are
+    the real ones (weight, output); ``imass``/``iinertia`` the inertial ones the kicks
+    divide by, equal to them unless density scaling raised them."""
     pos: np.ndarray = _z(0, 2)
     vel: np.ndarray = _z(0, 2)
     omega: np.ndarray = _z(0)
@@ -120,11 +122,23 @@ class Clumps(_Arrays):
     force: np.ndarray = _z(0, 2)      # net force incl. gravity [N]
     moment: np.ndarray = _z(0)        # net moment about the centre of mass [N m]
     damp: np.ndarray = _z(0)          # local damping coefficient alpha [-]
+    imass: np.ndarray = _z(0)         # inertial mass [kg] (density scaling may raise it)
+    iinertia: np.ndarray = _z(0)      # inertial moment of inertia [kg m^2]
 
     def __len__(self):
         return self.pos.shape[0]
 
+    @classmethod
+    def from_dict(cls, d, prefix):
+        """Checkpoints written before the inertial columns existed: real = inertial."""
+        d = dict(d)
+        for name, real in (("imass", "mass"), ("iinertia", "inertia")):
+            d.setdefault(prefix + name, d[prefix + real])
+        return super().from_dict(d, prefix)
+
     def append(self, **cols):
+        cols.setdefault("imass", cols["mass"])
+        cols.setdefault("iinertia", cols["inertia"])
         n0 = len(self)
         for f in fields(self):
             setattr(self, f.name, _grow(getattr(self, f.name), n0 + 1))

@@ -35,6 +35,7 @@ from ..provenance import Recorder
 from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import EFFECTS, MODIFIERS, load_material_values
 from ..scenario.runner import check_backend
+from ..scenario.scenario import check_stone_model
 from .horizon import chosen_for
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
@@ -178,6 +179,8 @@ def _loop(args):
     out = writable_dir(args.out_dir)
     measured = _points(args, cfg)
     base = load_material_values(args.parameters) if args.parameters else {}
+    check_stone_model(cfg, args.config, args.backend, parameters=(args.parameters, base),
+                      stages=("loop.effects",))
     long_term_law = _long_term_law(args.horizon, lp) if args.horizon else None
     targets = Targets(args.conditions, args.measured, measured)
     y, point_test = targets.y, targets.point_test

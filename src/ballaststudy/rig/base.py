@@ -12,6 +12,7 @@ import xarray as xr
 from ..atomic import atomic_path
 from ..dem import Simulation
 from ..inputs import open_netcdf
+from ..stones import stone_model
 
 
 class Rig:
@@ -50,9 +51,22 @@ class Rig:
         """{name: ball ids} of the bodies that are not stones (plates, loading bodies)."""
         return {}
 
+    @property
+    def stones(self):
+        """The stone model of this specimen (ballaststudy.stones): what the rig asks about
+        its stones."""
+        return stone_model(self.layout.stone_model)
+
+    def use_stone_model(self, name):
+        """Make the assembled stones the model ``name``'s (a no-op for the model they are)."""
+        if name != self.layout.stone_model:
+            stone_model(name).make(self.sim, self.stone_balls())
+            self.layout.stone_model = name
+            self.sim.prepare()      # the lists and the automatic dt of the new bodies
+
     def fragments(self):
-        """Fragment id per stone ball (-1 for dead balls): Simulation.fragments."""
-        return self.sim.fragments(self.layout.n_stone_balls).astype(np.int32)
+        """Fragment id per stone ball (-1 for dead balls), from the stone model."""
+        return self.stones.fragments(self.sim, self.layout.n_stone_balls).astype(np.int32)
 
     # ----------------------------------------------------------------- I/O
     def engine_bytes(self):
@@ -107,6 +121,7 @@ class Rig:
                    "rig_layout_json": json.dumps(vars(lay)),
                    "rig_params_json": json.dumps(self.params.to_dict()),
                    "database": lay.database, "seed": lay.seed, "step": sim.step,
+                   "stone_model": lay.stone_model,
                    **(attrs or {})})
         ds["bond_intact"] = ds["bond_intact"].astype(np.int8)
         return ds

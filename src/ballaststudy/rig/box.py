@@ -34,6 +34,7 @@ class RigLayout:
     stage_steps: dict = field(default_factory=dict)
     # stages that stopped at their step limit, not at their criterion: one line each
     stages_at_limit: list = field(default_factory=list)
+    stone_model: str = "bonded"     # how the stones are modelled now (ballaststudy.stones)
 
 
 class BoxRig(Rig):

@@ -29,7 +29,8 @@ class CycleState:
     cycle_sample0: int = 0           # first sample of the cycle
     peak_sample: int = -1            # sample of the upper reversal (-1: not yet)
     log0: int = 0                    # breakage log entries before loading began
-    n_bonds0: int = 0                # bonds intact when loading began
+    n_bonds0: int = 0                # breakable units when loading began (stone model's:
+                                     # flat joints, or rigid stones)
     rows: list = field(default_factory=list)           # behaviours per cycle
     metrics_cfg: dict = field(default_factory=dict)
     failure: str = ""                # why the run stopped before its cycles ("" = it did not:
@@ -51,7 +52,7 @@ class CyclicRun:
         self.checkpoint_every = int(checkpoint_every)
         self.max_cycle_steps = max_cycle_steps
         self.s = self.State(log0=rig.sim.n_breakages, metrics_cfg=dict(metrics or {}),
-                            n_bonds0=int((rig.sim.bonds.active == 1).sum()))
+                            n_bonds0=rig.stones.breakable_units(rig.sim))
         self.samples = {k: [] for k in ("step", "cycle", *self.CHANNELS)}
         self.cyc = {k: [] for k in self.CYCLE_FIELDS}
         self.hooks = []      # callables(run, cycle) at the end of each cycle (VTK...)

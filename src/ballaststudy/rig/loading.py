@@ -195,7 +195,7 @@ class LoadingRun(CyclicRun):
         rig, s = self.rig, self.s
         px, py, pa = rig.plate_state()
         pk = s.peak or dict(y=np.nan, px=np.nan, py=np.nan, pa=np.nan, contacts=0)
-        modes = rig.sim.breakages()["mode"][s.log0:]
+        modes = rig.stones.breakages(rig.sim)["mode"][s.log0:]
         force = self.samples["force"][s.cycle_sample0:]
         return dict(cycle_end_step=rig.sim.step, cycle_steps=rig.sim.step - s.cycle_start_step,
                     force_max=max(force), force_min=min(force),
@@ -222,7 +222,7 @@ class LoadingRun(CyclicRun):
         (bottom forces from the cycle's peak load, where the force propagates)."""
         rig, s, lay = self.rig, self.s, self.rig.layout
         sim = rig.sim
-        b, bd = sim.balls, sim.bonds
+        b = sim.balls
         n = len(b)
         ballast = np.zeros(n, bool)
         ballast[: lay.n_stone_balls] = b.alive[: lay.n_stone_balls] == 1
@@ -237,11 +237,11 @@ class LoadingRun(CyclicRun):
         px, py, _ = rig.plate_state()
         p = rig.params
         k0 = s.cycle_sample0
-        br = sim.breakages()
+        br = rig.stones.breakages(sim)
+        link_i, link_j, link_intact = rig.stones.topology(sim)
         return dict(
             pos=b.pos.copy(), rad=b.rad.copy(), ballast=ballast,
-            bond_i=bd.i, bond_j=bd.j,
-            bond_intact=sim.intact_bonds(),
+            bond_i=link_i, bond_j=link_j, bond_intact=link_intact,
             contact_i=i, contact_j=j, contact_fn=fn, ball_touches_container=touch,
             geometry=dict(container_x_min=float(sim.walls.seg[lay.left_low, 0]),
                           container_x_max=float(sim.walls.seg[lay.right_low, 0]),
@@ -255,7 +255,7 @@ class LoadingRun(CyclicRun):
             load_force=np.asarray(self.samples["force"][k0:]),
             break_step=br["step"][s.log0:],
             break_mode=np.where(br["mode"][s.log0:] == "tension", 1, 2).astype(np.int32),
-            n_bonds_installed=int(s.n_bonds0), n_elements_per_bond=int(bd.state.shape[1]),
+            n_bonds_installed=int(s.n_bonds0), n_elements_per_bond=rig.stones.elements_per_unit(sim),
             cycle_start_step=int(s.cycle_start_step), cycle_end_step=int(sim.step) + 1)
 
     def behaviours(self):

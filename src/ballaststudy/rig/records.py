@@ -19,7 +19,7 @@ from .loading import CYCLE_FIELDS
 def breakage_records(run):
     """Breakages since loading began: dict of arrays incl. the cycle each fell in
     (-1 = static pre-loading / unloading)."""
-    br = run.rig.sim.breakages()
+    br = run.rig.stones.breakages(run.rig.sim)
     k0 = run.s.log0
     out = {k: np.asarray(v[k0:]) for k, v in br.items()}
     out["mode_code"] = np.array([1 if m == "tension" else 2 for m in out["mode"]], np.int8)
@@ -132,11 +132,12 @@ def to_dataset(run, attrs=None):
     data["wall_kind"] = ("wall", wall_kind, {"units": "1", "long_name": "container wall segment",
                                              "flag_values": np.array([0, 1, 2, 3], np.int8),
                                              "flag_meanings": "outside bottom left right"})
-    n_bonds = int(s.n_bonds0) * int(rig.sim.bonds.state.shape[1])
+    n_bonds = int(s.n_bonds0) * rig.stones.elements_per_unit(rig.sim)
     ds = xr.Dataset(data, coords=coords, attrs={
         "Conventions": "CF-1.8",
         "title": "box-test case: per-cycle records and behaviours (thesis 4.2.3, 4.5.1)",
         "database": lay.database, "seed": lay.seed, "cycles_requested": run.cycles,
+        "stone_model": lay.stone_model,
         "y_reference": s.y_ref, "static_end_step": s.static_end_step,
         "static_mean_forces_N": json.dumps(s.static_mean),
         "static_mean_wall_forces_N": json.dumps(s.static_walls),
@@ -197,6 +198,7 @@ def cyclic_dataset(run, channel_units, title, attrs=None):
                                             {"units": "1", "long_name": "loading cycle"})},
                     attrs={"Conventions": "CF-1.8", "title": title,
                            "database": run.rig.layout.database, "seed": run.rig.layout.seed,
+                           "stone_model": run.rig.layout.stone_model,
                            "cycles_requested": run.cycles,
                            "thickness_m": run.rig.sim.thickness,
                            "rig_params_json": json.dumps(run.rig.params.to_dict()),

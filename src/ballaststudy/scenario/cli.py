@@ -33,7 +33,8 @@ from ..rig.vtk import vtk_hook
 from .modifiers import ModifierError, load_material_values, material_modifiers
 from .mapping import stage_mapping
 from .runner import checkpoint_of, prepared_run, write_case
-from .scenario import conditioned_rig, scenario
+from ..stones import STONE_MODELS
+from .scenario import check_stone_model, conditioned_rig, scenario
 
 
 def _kind(args, cfg):
@@ -91,8 +92,9 @@ def case_scenario(args):
     mapping = stage_mapping(cfg, args.config, args.strength_envelope, kind) if conditions else None
     rig, record = conditioned_rig(kind, cfg.get("rig", {}), conditions, args.mode, args.conditions, mapping)
     material = load_material_values(args.parameters) if args.parameters else {}
+    model = check_stone_model(cfg, args.config, "cpu", args.stone_model, (args.parameters, material), stages=())
     return scenario(kind, [args.assembled], rig, args.cycles, material_modifiers(material), conditions,
-                    args.conditions or "", cfg.get("metrics"), mapping=record), material
+                    args.conditions or "", cfg.get("metrics"), mapping=record, stone_model=model), material
 
 
 def _progress(bar, first):
@@ -117,6 +119,7 @@ def _case_run(args):
                                                           args.strength_envelope) if p]),
                         params={"cycles": args.cycles, "rig": sc.rig.to_dict(), "metrics": sc.metrics,
                                 "material_parameters": material, "stress_mapping": sc.mapping,
+                                "stone_model": sc.stone_model,
                                 "scenario_key": sc.key})
     try:
         run, resumed = prepared_run(sc, 0, out, args.checkpoint_every, args.restart)
@@ -240,6 +243,8 @@ def register(subparsers):
                    "its parameters instead of Table 4.2's (a fresh run; a resumed one keeps its own)")
     r.add_argument("--strength-envelope", type=Path, help="the specimens' strength envelope "
                    "(case envelope), for the config's stress_mapping strength_ratio")
+    r.add_argument("--stone-model", choices=tuple(STONE_MODELS), help="how the stones are "
+                   "modelled in this run (default: the config's stone_model; ballaststudy.stones)")
     r.add_argument("--config", default="config/config.yaml", type=Path)
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_case_run)

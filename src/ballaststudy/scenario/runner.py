@@ -84,6 +84,7 @@ def fresh_run(scenario, k, checkpoint, checkpoint_every=None):
     rig_class, run_class, _ = rig_classes(scenario.kind)
     rig = rig_class.from_dataset(assembled, "engine_checkpoint")
     rig.params = scenario.rig
+    rig.use_stone_model(scenario.stone_model)
     for name, values in scenario.modifier_values():
         MODIFIERS[name].apply(rig, values, scenario.covariates)
     if scenario.perturbation_m_s:       # the chaos probe (loop.select)
@@ -207,6 +208,10 @@ def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared
     first_cycle_key, and the first loading shared in the cache folder ``shared``, see
     above), or every unfinished case in GPU batches, one per contact law (cuda)."""
     check_backend(backend)
+    if backend == "cuda" and any(c[0].stone_model != "bonded" for c in cases):
+        raise ConfigError("config", "stone_model", "the GPU batch (backend cuda) runs bonded "
+                          "stones only (no per-clump timestep or clump density scaling on the "
+                          "device yet); allowed: stone_model bonded, or backend cpu")
     unique = {}
     for case in cases:
         unique.setdefault(str(case[2]), case)

@@ -9,7 +9,7 @@ specimens' content (sha-256 of their files, not their names: specimens re-assemb
 the same names must not reuse old cases), the rig's parameters as the run sees them (the
 modifiers' rig settings applied) but those inert under the others (``inert_keys``: a
 quasi-static test's frequency), the modifiers in the order they are applied with their
-values (12 significant digits), the covariates its modifiers read, the cycles, the metrics
+values (12 significant digits), the stone model when it is not the thesis' bonded one, the covariates its modifiers read, the cycles, the metrics
 settings, a chaos probe's perturbation when there is one, and the stress mapping's kind and
 ratio when one is applied (mapping.py; the bounds it set are in the rig's parameters
 already). File names and the conditions file are labels, not part of the key: scenarios of
@@ -24,6 +24,7 @@ from pathlib import Path
 from ..provenance.record import sha256_file
 from ..rig.kinds import RUNS_TESTS, params_class, params_from_config
 from ..schema import ConfigError
+from ..stones import DEFAULT, stone_model as stone_model_named
 from .mapping import StressMapping, key_of
 from .modifiers import MODIFIERS
 
@@ -61,6 +62,7 @@ class Scenario:
     perturbation_m_s: float = 0.0   # > 0: the chaos probe's velocity perturbation
     perturbation_seed: int = 0      # its seed (+ the specimen's index)
     mapping_json: str = '{"stress_mapping":"none"}'   # the stress mapping's record at the test
+    stone_model: str = DEFAULT      # how the stones are modelled (ballaststudy.stones)
 
     @property
     def rig(self):
@@ -119,11 +121,38 @@ class Scenario:
                  if self.perturbation_m_s else {})
         mapped = key_of(self.mapping)
         probe.update({"stress_mapping": mapped} if mapped else {})
+        # the thesis' bonded stones keep the keys they had before the switch existed
+        probe.update({"stone_model": self.stone_model} if self.stone_model != DEFAULT else {})
         text = _canonical({"kind": self.kind, "specimens": list(self.specimen_hashes),
                            "rig": rig, "cycles": self.cycles,
                            "modifiers": [[n, _rounded(dict(v))] for n, v in self.modifiers],
                            "covariates": self.read_covariates(), "metrics": self.metrics, **probe})
         return hashlib.sha1(text.encode()).hexdigest()[:12]
+
+
+STONE_MODEL_STAGES = ("calibration.parameters", "loop.effects")
+
+
+def check_stone_model(cfg, file, backend=None, model=None, parameters=None,
+                      stages=STONE_MODEL_STAGES):
+    """What the stone model (``model``, default the config's) cannot run, refused in one
+    line (ConfigError) before anything runs: a modifier the ``stages`` name (calibration
+    parameters, loop effects) or a calibrated value (``parameters``: (file, {name:
+    value})) acting on flat joints where the model has none; the GPU batch (``backend``,
+    default the config's) for a model it does not step. Returns the model's name."""
+    model = stone_model_named(model or cfg.get("stone_model", DEFAULT))
+    named = [(file, key, m) for key in stages
+             for m in (cfg.get(key.split(".")[0]) or {}).get(key.split(".")[1]) or []]
+    if parameters is not None:
+        named += [(parameters[0], "parameters", m) for m in parameters[1]]
+    for where, key, m in named:
+        if m in MODIFIERS and MODIFIERS[m].needs_flat_joints and not model.has_flat_joints:
+            raise ConfigError(where, key, f"{m} acts on flat joints, which stone_model "
+                              f"{model.name} has not; allowed: stone_model bonded, or leave {m} out")
+    if model.name != DEFAULT and (backend or cfg.get("backend", "cpu")) == "cuda":
+        raise ConfigError(file, "backend", f"cuda: the GPU batch runs bonded stones only; allowed: "
+                          f"backend cpu with stone_model {model.name}")
+    return model.name
 
 
 def conditioned_rig(kind, rig_config, conditions=None, mode=None, conditions_file="conditions",
@@ -181,13 +210,16 @@ def conditioned_keys(kind, conditions_list):
 
 
 def scenario(kind, specimens, rig, cycles, modifiers=(), conditions=None, conditions_file="",
-             metrics=None, perturbation_m_s=0.0, perturbation_seed=0, mapping=None):
+             metrics=None, perturbation_m_s=0.0, perturbation_seed=0, mapping=None, stone_model=DEFAULT):
     """A Scenario from plain values: ``rig`` a params object and ``mapping`` its stress
     mapping's record (both from conditioned_rig; None: none), ``modifiers`` [(name,
-    {parameter: value})] checked against the registry, ``conditions`` the loaded test (its
-    covariates are kept)."""
+    {parameter: value})] checked against the registry and the stone model (``stone_model``:
+    ballaststudy.stones), ``conditions`` the loaded test (its covariates are kept)."""
+    model = stone_model_named(stone_model)
     for name, values in modifiers:
         MODIFIERS[name].check(values)
+        if MODIFIERS[name].needs_flat_joints and not model.has_flat_joints:
+            raise ValueError(f"modifier {name} acts on flat joints; the {model.name} stone model has none")
     specimens = tuple(str(s) for s in specimens)
     return Scenario(
         kind=kind, specimens=specimens, specimen_hashes=tuple(content_hash(s) for s in specimens),
@@ -197,4 +229,4 @@ def scenario(kind, specimens, rig, cycles, modifiers=(), conditions=None, condit
         covariates_json=_canonical((conditions or {}).get("covariates") or {}),
         metrics_json=_canonical(metrics), conditions_file=str(conditions_file or ""),
         perturbation_m_s=float(perturbation_m_s), perturbation_seed=int(perturbation_seed),
-        mapping_json=_canonical(mapping or {"stress_mapping": "none"}))
+        mapping_json=_canonical(mapping or {"stress_mapping": "none"}), stone_model=model.name)

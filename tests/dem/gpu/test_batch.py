@@ -279,3 +279,13 @@ def test_an_export_of_whole_arrays_equals_the_export_case_by_case(small_model, b
                 x, y = getattr(getattr(a, part), f.name), getattr(getattr(b, part), f.name)
                 assert np.array_equal(x, y), f"{part}.{f.name}"
     assert out[0][0].cnt[0] == sims[0].cnt[0] + 12
+
+
+def test_rigid_stones_are_refused_in_one_line(small_model):
+    """Stones made clumps (the rigid stone model): the batch has neither the per-clump
+    timestep nor clump density scaling, so it refuses them instead of stepping them by
+    another rule than the CPU's; a clump that is no stone (the plate) is stepped."""
+    sim = small_model(1, "hooke")
+    sim.make_clumps([np.flatnonzero(sim.balls.stone == 0)])
+    with pytest.raises(BatchError, match="case 0: rigid stones .* run them on the cpu"):
+        Batch.from_simulations([sim])

@@ -12,6 +12,7 @@ from ballaststudy.rig.batched import run_batched
 from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRig, BiaxialRun, assemble_biaxial
 from ballaststudy.rig.cyclic import CyclicRun
 from ballaststudy.rig.library import load_library
+from ballaststudy.stones import STONE_MODELS
 
 from ...biaxial_fast import FAST_LOADING
 from .beds import assert_same_motion
@@ -46,7 +47,7 @@ def wall_cycles(sim, cycles, dt_factor=None):
                v_min=5e-4, v_max=5e-3, brake=0.3)
     ctl.wall_position(right, 0)
     ctl.build()
-    run = WallCycles(types.SimpleNamespace(sim=sim), cycles, ctl)
+    run = WallCycles(types.SimpleNamespace(sim=sim, stones=STONE_MODELS["bonded"]), cycles, ctl)
     run.dt_factor = dt_factor
     return run
 

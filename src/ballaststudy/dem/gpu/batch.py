@@ -75,6 +75,10 @@ def _to_host(arr, lo=0, hi=None):
 def _check(sim, k):
     if sim.prm[P.DT] <= 0.0:
         raise BatchError(f"case {k}: no dt (prepare the Simulation)")
+    b = sim.balls
+    if ((b.clump >= 0) & (b.stone >= 0) & (b.alive == 1)).any():
+        raise BatchError(f"case {k}: rigid stones (clumps of stone balls): the batch has no "
+                         "per-clump timestep or clump density scaling yet; run them on the cpu")
 
 
 class _Prepared:

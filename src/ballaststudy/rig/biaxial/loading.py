@@ -499,7 +499,7 @@ class BiaxialRun(CyclicRun):
     # --------------------------------------------------------------- records
     def cycle_row(self):
         rig, s = self.rig, self.s
-        modes = rig.sim.breakages()["mode"][s.log0:]
+        modes = rig.stones.breakages(rig.sim)["mode"][s.log0:]
         sig1 = self._load_cell(self.cycle_samples("axial_stress"), self.cycle_samples("step"))
         peak = s.peak_sample - s.cycle_sample0 - (len(self.cycle_samples("step")) - len(sig1)) // 2
         unloading = sig1[min(max(0, peak), len(sig1) - 1):]     # (the window centred on it)
@@ -540,22 +540,23 @@ class BiaxialRun(CyclicRun):
         engine's arrays as they are: the compute only reads them)."""
         rig, s = self.rig, self.s
         sim, lay = rig.sim, rig.layout
-        b, bd = sim.balls, sim.bonds
+        b = sim.balls
         stone = np.zeros(len(b), bool)
         stone[rig.stone_balls()] = True
         i, j, fn = rig.ball_contacts()
         seg = sim.walls.seg
-        br = sim.breakages()
+        br = rig.stones.breakages(sim)
+        link_i, link_j, link_intact = rig.stones.topology(sim)
         return dict(
             pos=b.pos, rad=b.rad, ballast=stone,
-            bond_i=bd.i, bond_j=bd.j, bond_intact=sim.intact_bonds(),
+            bond_i=link_i, bond_j=link_j, bond_intact=link_intact,
             contact_i=i, contact_j=j, contact_fn=fn,
             geometry=dict(x_left=rig.side_x("left").mean(), x_right=rig.side_x("right").mean(),
                           y_bottom=float(seg[lay.bottom[0], 1]), y_top=float(seg[lay.top[0], 1])),
             height=rig.height(), width=rig.width(), height0=s.height0, width0=s.width0,
             break_step=br["step"][s.log0:],
             break_mode=np.where(br["mode"][s.log0:] == "tension", 1, 2),
-            n_bonds_installed=s.n_bonds0, n_elements_per_bond=int(bd.state.shape[1]),
+            n_bonds_installed=s.n_bonds0, n_elements_per_bond=rig.stones.elements_per_unit(sim),
             cycle_start_step=s.cycle_start_step, cycle_end_step=sim.step + 1)
 
     def behaviours(self):

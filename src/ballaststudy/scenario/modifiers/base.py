@@ -46,6 +46,8 @@ class Modifier:
                                         # with the law's rolling sub-model (rolling_resistance)
     rig_settings: tuple = ()            # ((rig parameter, value), ...) it sets whatever its
                                         # values, before ``configure`` (what a cache key sees)
+    needs_flat_joints: bool = False     # acts on the stones' flat joints: a stone model
+                                        # without them (rigid) cannot take it
 
     @property
     def hook_only(self):

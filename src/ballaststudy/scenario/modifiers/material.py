@@ -49,7 +49,7 @@ F_STR = Modifier(
     "F_str_co", "flat-joint tensile strength and cohesion scaled by F_str_co / 3.5 (Table 4.2)",
     (ModifierParameter("F_str_co", "strength and cohesion scaling factor F_str-co (Table 4.2)", "1",
                        0.0, 1000.0, True),),
-    _scale_strength, current=_strength, role="material")
+    _scale_strength, current=_strength, role="material", needs_flat_joints=True)
 MU = contact_modifier("mu", "mu", "friction coefficient of the linear contact between stones", "1",
                       0.0, 10.0, False)
 E_STAR = contact_modifier("E_star", "E", "effective modulus E* of the linear contact between stones",

@@ -1,0 +1,45 @@
+"""What a stone model answers (stones/__init__.py): the stones made in the engine, their
+topology (which balls hold together now), and what can break and what broke."""
+import numpy as np
+
+from ..dem.fragments import fragments as label_fragments
+
+
+class StoneModelError(ValueError):
+    """An unknown model, or a model asked for what it cannot do."""
+
+
+class StoneModel:
+    """The interface; a model overrides every method. ``name`` is its registry key."""
+    name = ""
+    description = ""
+    has_flat_joints = False         # what a modifier acting on flat joints needs
+
+    def make(self, sim, stone_balls):
+        """Turn the assembled (bonded) stones of balls ``stone_balls`` into this model's."""
+        raise NotImplementedError
+
+    def topology(self, sim):
+        """(i, j, intact): links between balls whose connected components are the
+        fragments (the stones as they are now)."""
+        raise NotImplementedError
+
+    def breakable_units(self, sim):
+        """How many units can break now (bonds, stones)."""
+        raise NotImplementedError
+
+    def elements_per_unit(self, sim):
+        """Breakage records a unit can give: units x this = the breakage rate's
+        denominator."""
+        raise NotImplementedError
+
+    def breakages(self, sim):
+        """The breakage record since the start (Simulation.breakages' columns)."""
+        raise NotImplementedError
+
+    def fragments(self, sim, n_balls):
+        """Fragment label of balls 0..n_balls-1 (-1: dead), numbered by lowest ball id."""
+        i, j, intact = self.topology(sim)
+        alive = sim.balls.alive[:n_balls] == 1
+        keep = (i < n_balls) & (j < n_balls)
+        return label_fragments(n_balls, i[keep], j[keep], intact[keep], alive)[1]

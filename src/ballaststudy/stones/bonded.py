@@ -1,0 +1,28 @@
+"""Bonded stones (thesis 4.2.1, physics spec "Flat-joint bond"): the BPM as assembled."""
+import numpy as np
+
+from .base import StoneModel
+
+
+class BondedStones(StoneModel):
+    name = "bonded"
+    description = "balls glued by flat joints (the thesis' BPM), breaking element by element"
+    has_flat_joints = True
+
+    def make(self, sim, stone_balls):
+        """The assembly's stones are already bonded ones."""
+
+    def topology(self, sim):
+        bd = sim.bonds
+        return bd.i, bd.j, sim.intact_bonds()
+
+    def breakable_units(self, sim):
+        """The active flat joints (eqs. 4.6-4.8's FJ_Total at N_r = 1)."""
+        return int((sim.bonds.active == 1).sum())
+
+    def elements_per_unit(self, sim):
+        """Each joint's elements N_r break one by one, each a record."""
+        return int(sim.bonds.state.shape[1])
+
+    def breakages(self, sim):
+        return sim.breakages()

@@ -1,0 +1,76 @@
+"""The box rig with each stone model (ballaststudy.stones) on the same assembled case: the
+rigid model sees the stones the bonded one does (fragments, the links that make the
+stone solids), its loading run records every cycle and resumes bit for bit from a
+checkpoint after a crash; the rig asks the model, whichever it is."""
+import numpy as np
+import pytest
+
+from ballaststudy.metrics.void_ratio import void_ratio
+from ballaststudy.rig.box import BoxRig
+from ballaststudy.rig.loading import LoadingRun
+from ballaststudy.rig.records import to_dataset
+from ballaststudy.stones import STONE_MODELS
+
+CYCLES = 2
+
+
+def _rigid(path):
+    rig = BoxRig.load(path)
+    rig.use_stone_model("rigid")
+    return rig
+
+
+def _solids(rig):
+    """Void ratio with the stones as solid (the links make each stone's solid)."""
+    p, sim = rig.params, rig.sim
+    frag = rig.fragments()
+    labels = np.full(len(sim.balls), -1)
+    labels[: len(frag)] = frag
+    i, j, intact = rig.stones.topology(sim)
+    return void_ratio(sim.balls.pos, sim.balls.rad, labels, int(frag.max()) + 1, i, j, intact,
+                      -0.5 * p.width_m, 0.5 * p.width_m, 0.0, p.depth_m)["void_ratio"]
+
+
+def test_the_rigid_model_sees_the_stones_the_bonded_model_does(assembled):
+    bonded, rigid = BoxRig.load(assembled[0]), _rigid(assembled[0])
+    assert bonded.stones is STONE_MODELS["bonded"] and rigid.stones is STONE_MODELS["rigid"]
+    frag = bonded.fragments()
+    assert np.array_equal(rigid.fragments(), frag)
+    assert rigid.stones.breakable_units(rigid.sim) == int(frag.max()) + 1
+    assert bonded.stones.breakable_units(bonded.sim) == int((bonded.sim.bonds.active == 1).sum())
+    assert _solids(rigid) == pytest.approx(_solids(bonded), rel=1e-12)
+    b = rigid.sim.balls
+    stone = rigid.stone_balls()
+    assert (b.clump[stone] >= 0).all() and not (rigid.sim.bonds.active == 1)[
+        b.clump[rigid.sim.bonds.i] == b.clump[rigid.sim.bonds.j]].any()
+    # the clumps' own timestep from the first step (not the bonded specimen's): larger
+    assert rigid.sim.dt == pytest.approx(rigid.params.dt_safety * rigid.sim.critical_dt(), rel=1e-12)
+    assert rigid.sim.dt > bonded.sim.dt
+
+
+@pytest.fixture(scope="module")
+def rigid_run(assembled, tmp_path_factory):
+    ck = tmp_path_factory.mktemp("rigid") / "ck.npz"
+    return LoadingRun(_rigid(assembled[0]), cycles=CYCLES, checkpoint=ck, checkpoint_every=1).run()
+
+
+def test_a_rigid_loading_run_records_its_cycles_without_breakage(rigid_run):
+    ds = to_dataset(rigid_run)
+    assert ds.attrs["stone_model"] == "rigid" and ds.sizes["cycle"] == CYCLES
+    assert np.all(ds["breakage_rate"].values == 0.0) and ds.sizes.get("breakage", 0) == 0
+    assert np.all(np.isfinite(ds["settlement"])) and np.all((ds["void_ratio"] > 0) & (ds["void_ratio"] < 1))
+    assert len(np.unique(ds["n_fragments"].values)) == 1
+
+
+def test_a_rigid_run_resumes_bitwise_after_a_crash(rigid_run, assembled, tmp_path):
+    ck = tmp_path / "ck.npz"
+    first = LoadingRun(_rigid(assembled[0]), cycles=CYCLES, checkpoint=ck, checkpoint_every=1)
+    first.run(stop_after=1)
+    first.advance(max_steps=200)     # progress after the checkpoint that the crash loses
+    resumed = LoadingRun.from_checkpoint(ck)
+    assert resumed.rig.layout.stone_model == "rigid"
+    resumed.run()
+    a, b = to_dataset(rigid_run), to_dataset(resumed)
+    for name in a.data_vars:
+        assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
+    assert np.array_equal(rigid_run.rig.sim.clumps.pos, resumed.rig.sim.clumps.pos)
