@@ -41,7 +41,7 @@ def parse_spec(text):
     return label or os.path.basename(os.path.dirname(path)) or path, path, mode
 
 
-def loaded_rig(path, model, cfg, mode, first_loading=None):
+def loaded_rig(path, model, cfg, mode, first_loading=None, deviator_max=None):
     ds = open_netcdf(path, "assembled")
     kind = kind_of(ds)
     rig_class, run_class, _ = rig_classes(kind)
@@ -49,6 +49,8 @@ def loaded_rig(path, model, cfg, mode, first_loading=None):
     rig.params = params_from_config(kind, cfg.get("rig", {}))
     if first_loading is not None and hasattr(rig.params, "first_loading_inertial_number"):
         rig.params.first_loading_inertial_number = first_loading
+    if deviator_max is not None and hasattr(rig.params, "deviator_max_kPa"):
+        rig.params.deviator_max_kPa = deviator_max
     if mode:
         name, _, f = mode.partition(":")
         rig.params.mode = name
@@ -58,9 +60,9 @@ def loaded_rig(path, model, cfg, mode, first_loading=None):
     return rig, run_class
 
 
-def measure(path, model, cfg, mode, warm, cycles, first_loading=None):
+def measure(path, model, cfg, mode, warm, cycles, first_loading=None, deviator_max=None):
     """Time ``cycles`` cycles after ``warm`` untimed ones: dict of the row's figures."""
-    rig, run_class = loaded_rig(path, model, cfg, mode, first_loading)
+    rig, run_class = loaded_rig(path, model, cfg, mode, first_loading, deviator_max)
     run = run_class(rig, warm + cycles, checkpoint=None)
     stamps = {}
 
@@ -94,15 +96,19 @@ def main(argv=None):
     ap.add_argument("--first-loading-inertial-number", type=float, default=1e-3,
                     help="biaxial: cycle 0's first loading (untimed; the config's 1.5e-5 "
                     "takes ~16 M bonded steps on a full specimen); None-like 0 = the config's")
+    ap.add_argument("--deviator-max-kPa", type=float, help="biaxial: q_max of the cycles "
+                    "instead of the config's (a bound both models' specimens carry)")
     a = ap.parse_args(argv)
     warm, cycles = (1, 3) if a.quick else (a.warm, a.cycles)
     cfg = load_config(a.config)
     print(f"config {a.config}; {warm} warm + {cycles} timed cycles a row; process CPU time, "
-          f"NUMBA_NUM_THREADS={os.environ['NUMBA_NUM_THREADS']}")
+          f"NUMBA_NUM_THREADS={os.environ['NUMBA_NUM_THREADS']}; biaxial: first loading at I = "
+          f"{a.first_loading_inertial_number or '(config)'}, q_max = {a.deviator_max_kPa or '(config)'} kPa")
     for spec in a.specimens:
         label, path, mode = parse_spec(spec)
         first = a.first_loading_inertial_number or None
-        rows = {m: measure(path, m, cfg, mode, warm, cycles, first) for m in STONE_MODELS}
+        rows = {m: measure(path, m, cfg, mode, warm, cycles, first, a.deviator_max_kPa)
+                for m in STONE_MODELS}
         for m, r in rows.items():
             print(f"  {label} {m:6s}: {r['core_s']:.3f} core-s/cycle ({r['cycles_timed']} timed), "
                   f"{r['steps']:.0f} steps/cycle, dt {r['dt']:.3g} s [{r['limit']}], inertia added "

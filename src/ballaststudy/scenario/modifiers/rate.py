@@ -9,7 +9,7 @@ from .base import Modifier, ModifierParameter
 
 def configure(rig, values, covariates):
     sim = rig.sim
-    sim.set_damping(0.0)
+    sim.set_damping(0.0, clump_alpha=0.0)       # rigid stones too (their clumps)
     for a in STONE_MATERIALS:
         for b in range(sim.coef.shape[0]):
             sim.set_contact_coefficient("beta_n", values["contact_damping_ratio"], a, b)
