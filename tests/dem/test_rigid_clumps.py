@@ -195,3 +195,20 @@ def test_perturbation_moves_rigid_stones_not_other_clumps(small_model):
     peb = b.clump == 3
     w, r = c.omega[3], b.pos[peb] - c.pos[3]
     assert np.allclose(b.vel[peb], c.vel[3] + w * np.column_stack([-r[:, 1], r[:, 0]]), atol=1e-15)
+
+
+def test_inertial_masses_count_a_clump_once(small_model):
+    """Per ball, the share of the inertial mass: a free ball's 1/minv, a pebble's share of
+    its clump's (by mass); summed over a clump's pebbles: the clump's inertial mass, with
+    density scaling raising it."""
+    sim = _rigid_small_model(small_model)
+    b, c = sim.balls, sim.clumps
+    free = b.clump < 0
+    assert np.array_equal(sim.inertial_masses()[free], 1.0 / b.minv[free])
+    per_clump = np.bincount(b.clump[~free], weights=sim.inertial_masses()[~free], minlength=len(c))
+    assert np.allclose(per_clump, c.imass, rtol=1e-12, atol=0.0)
+    sim.set_density_scaling(4.0 * sim.dt)
+    sim.run(20)
+    assert (c.imass > c.mass).any()
+    per_clump = np.bincount(b.clump[~free], weights=sim.inertial_masses()[~free], minlength=len(c))
+    assert np.allclose(per_clump, c.imass, rtol=1e-12, atol=0.0)

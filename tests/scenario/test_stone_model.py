@@ -91,3 +91,21 @@ def test_a_scenario_refuses_a_modifier_the_model_has_nothing_for(setup):
                  stone_model="rigid")
     with pytest.raises(ValueError, match="unknown stone model 'glued'"):
         scenario("biaxial", [asm], BiaxialParams(), 1, stone_model="glued")
+
+
+def test_the_specimen_mass_of_the_driven_boundaries_counts_each_ball_once(setup):
+    """The applied-force platen's mass is platen_mass_ratio x the specimen's inertial mass:
+    the sum over the live balls (it was the first ball's mass times their number, an
+    integer array taken as indices), and a rigid stone's clump counted once."""
+    from ballaststudy.rig.biaxial import BiaxialParams, BiaxialRun
+    asm, config, _ = setup
+    runs = []
+    for model in ("bonded", "rigid"):
+        rig = BiaxialRig.from_dataset(open_netcdf(asm, "assembled"), "engine_checkpoint")
+        rig.params = BiaxialParams.from_config(load_config(config)["rig"])
+        rig.use_stone_model(model)
+        runs.append(BiaxialRun(rig, 1))
+    b = runs[0].rig.sim.balls
+    live = b.alive == 1
+    assert runs[0].specimen_mass() == pytest.approx((1.0 / b.minv[live]).sum(), rel=1e-12)
+    assert runs[1].specimen_mass() == pytest.approx(b.mass[live].sum(), rel=1e-12)

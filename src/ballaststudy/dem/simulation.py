@@ -586,6 +586,17 @@ class Simulation:
                     dt_crit=float(per_body[k]),
                     percentiles=[float(v) for v in np.percentile(per_body, [1, 10, 50])])
 
+    def inertial_masses(self):
+        """Each ball's share of the inertial mass [kg]: a free ball's own (density scaling
+        included), a pebble's mass times its clump's inertial-to-real ratio (its clump's
+        inertial mass spread over the pebbles by mass, so that a sum over them counts the
+        clump once; 1 / minv of a pebble is the whole clump's, for its contacts' dashpots)."""
+        b, c = self.balls, self.clumps
+        out = 1.0 / b.minv
+        peb = b.clump >= 0
+        out[peb] = b.mass[peb] * c.imass[b.clump[peb]] / c.mass[b.clump[peb]]
+        return out
+
     def added_inertia(self):
         """The inertial mass density scaling adds to the free bodies (balls and clumps)
         now, as a fraction of their real mass (0 without density scaling)."""

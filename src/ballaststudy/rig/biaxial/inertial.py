@@ -41,7 +41,7 @@ def stone_size_and_density(rig, inertial=False):
     area = np.pi * b.rad[ids] ** 2
     per_stone = np.bincount(b.stone[ids], weights=area)
     d = float(np.median(np.sqrt(4.0 * per_stone[per_stone > 0] / np.pi)))
-    mass = 1.0 / b.minv[ids] if inertial else b.mass[ids]
+    mass = rig.sim.inertial_masses()[ids] if inertial else b.mass[ids]
     rho = float(mass.sum() / (area.sum() * rig.sim.thickness))
     return d, rho
 
@@ -49,8 +49,8 @@ def stone_size_and_density(rig, inertial=False):
 def bulk_density(rig):
     """The specimen's bulk density [kg/m^3]: the stones' inertial mass over the volume W H t
     between the walls."""
-    b, ids = rig.sim.balls, rig.stone_balls()
-    return float((1.0 / b.minv[ids]).sum() / (rig.width() * rig.height() * rig.sim.thickness))
+    ids = rig.stone_balls()
+    return float(rig.sim.inertial_masses()[ids].sum() / (rig.width() * rig.height() * rig.sim.thickness))
 
 
 def inertial_strain_rate(inertial_number, d, rho, p):

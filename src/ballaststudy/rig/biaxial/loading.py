@@ -162,11 +162,11 @@ class BiaxialRun(CyclicRun):
                 c.set(k, areal_mass=mu)
 
     def specimen_mass(self):
-        """The balls' inertial mass [kg] (density scaling's included: driven boundaries
+        """The live balls' inertial mass [kg] (density scaling's included: driven boundaries
         scale with it, so their step stays as stable as the balls', their stiffness over
-        their mass below that of the balls they touch)."""
-        b = self.rig.sim.balls
-        return float((1.0 / b.minv[b.alive]).sum())
+        their mass below that of the balls they touch; a rigid stone's counted once)."""
+        sim = self.rig.sim
+        return float(sim.inertial_masses()[sim.balls.alive == 1].sum())
 
     def _drive(self, controllers):
         """load_control applied_force: these controllers drive their walls as bodies of
