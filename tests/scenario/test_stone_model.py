@@ -66,6 +66,8 @@ def test_what_the_rigid_model_cannot_run_is_refused_before_it_runs(tmp_path):
     with pytest.raises(ConfigError, match="calibration.parameters.*F_str_co acts on flat joints"):
         check_stone_model(rigid, "c.yaml")
     assert check_stone_model(rigid, "c.yaml", stages=()) == "rigid"      # case run: not its stage
+    with pytest.raises(ConfigError, match="parametric.F_str_co"):
+        check_stone_model(rigid, "c.yaml", stages=("parametric",))
     with pytest.raises(ConfigError, match="loop.effects.*abrasion"):
         check_stone_model({**cfg, "stone_model": "rigid", "loop": {"effects": ["rate", "abrasion"]}},
                           "c.yaml", stages=("loop.effects",))

@@ -199,7 +199,8 @@ def _calibrate(args):
     inside = bool(np.all((t_before >= lower) & (t_before <= upper)))
     recorder = Recorder("calibrate", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
                                              *([args.strength_envelope] if args.strength_envelope else [])),
-                        params={"calibration": cal, "stress_mapping": cfg.get("stress_mapping")},
+                        params={"calibration": cal, "stress_mapping": cfg.get("stress_mapping"),
+                                "stone_model": cfg.get("stone_model", "bonded")},
                         seed=cfg["seed"])
     mapping = stage_mapping(cfg, args.config, args.strength_envelope, kind)
     evaluate = Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],

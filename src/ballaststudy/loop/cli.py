@@ -188,7 +188,8 @@ def _loop(args):
                                         *([args.parameters] if args.parameters else []),
                                         *([args.horizon] if args.horizon else []),
                                         *([args.strength_envelope] if args.strength_envelope else [])),
-                        params={"loop": lp, "base": base, "stress_mapping": cfg.get("stress_mapping")},
+                        params={"loop": lp, "base": base, "stress_mapping": cfg.get("stress_mapping"),
+                                "stone_model": cfg.get("stone_model", "bonded")},
                         seed=cfg["seed"])
     mapping = stage_mapping(cfg, args.config, args.strength_envelope, "biaxial")
     t0 = time.time()

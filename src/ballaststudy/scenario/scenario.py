@@ -130,7 +130,19 @@ class Scenario:
         return hashlib.sha1(text.encode()).hexdigest()[:12]
 
 
-STONE_MODEL_STAGES = ("calibration.parameters", "loop.effects")
+STONE_MODEL_STAGES = ("calibration.parameters", "loop.effects", "parametric")
+
+
+def _named_modifiers(cfg, key):
+    """The modifier names a stage's config names: a list or the keys of a mapping under
+    ``key`` ("calibration.parameters", "loop.effects"), or the one-at-a-time keys of a
+    section given values ("parametric")."""
+    node = cfg
+    for part in key.split("."):
+        node = (node or {}).get(part) or {}
+    if key == "parametric":
+        return [k for k, v in node.items() if k in MODIFIERS and v]
+    return list(node)
 
 
 def check_stone_model(cfg, file, backend=None, model=None, parameters=None,
@@ -141,8 +153,8 @@ def check_stone_model(cfg, file, backend=None, model=None, parameters=None,
     value})) acting on flat joints where the model has none; the GPU batch (``backend``,
     default the config's) for a model it does not step. Returns the model's name."""
     model = stone_model_named(model or cfg.get("stone_model", DEFAULT))
-    named = [(file, key, m) for key in stages
-             for m in (cfg.get(key.split(".")[0]) or {}).get(key.split(".")[1]) or []]
+    named = [(file, key if key != "parametric" else f"{key}.{m}", m) for key in stages
+             for m in _named_modifiers(cfg, key)]
     if parameters is not None:
         named += [(parameters[0], "parameters", m) for m in parameters[1]]
     for where, key, m in named:
