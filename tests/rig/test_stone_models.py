@@ -74,3 +74,15 @@ def test_a_rigid_run_resumes_bitwise_after_a_crash(rigid_run, assembled, tmp_pat
     for name in a.data_vars:
         assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
     assert np.array_equal(rigid_run.rig.sim.clumps.pos, resumed.rig.sim.clumps.pos)
+
+
+def test_vtk_draws_a_rigid_stones_links_as_intact(rigid_run, tmp_path):
+    from ballaststudy.rig.vtk import write_vtk
+    rig = rigid_run.rig
+    _, bonds, _ = write_vtk(rig, tmp_path, "end")
+    text = bonds.read_text()
+    state = text.split('Name="state"')[1].split(">", 1)[1].split("<", 1)[0].split()
+    i, j, intact = rig.stones.topology(rig.sim)
+    live = (rig.sim.balls.alive[i] == 1) & (rig.sim.balls.alive[j] == 1)
+    assert len(state) == live.sum()
+    assert sum(s == "0" for s in state) >= intact[live].sum() > 0

@@ -3,8 +3,9 @@
 * ``balls_NNNN.vtp``: one vertex per live ball with point data radius, stone, fragment,
   material (0 hard, 1 soft, 2 steel), body (0 stone, 1 plate, 2 loading ball);
   show with the "Point Gaussian" representation scaled by ``radius``.
-* ``bonds_NNNN.vtp``: one line per flat joint with cell data state
-  (0 intact, 1 broken in tension, 2 broken in shear, 3 partly broken).
+* ``bonds_NNNN.vtp``: one line per flat joint (rigid stones: the joints they were
+  assembled with) with cell data state (0 intact - for rigid stones: inside one clump -,
+  1 broken in tension, 2 broken in shear, 3 partly broken).
 * ``walls_NNNN.vtp``: the wall segments with cell data kind and force.
 """
 from pathlib import Path
@@ -64,7 +65,7 @@ def write_vtk(rig, folder, tag):
                                ("material", b.mat[live], "Int32"),
                                ("body", body[live], "Int32")])
     bd = sim.bonds
-    intact = sim.intact_bonds()
+    _, _, intact = rig.stones.topology(sim)     # the links holding each stone together now
     allint = bd.state.min(axis=1) == 1
     state = np.where(allint, 0, 3)
     br = sim.breakages()
