@@ -178,3 +178,25 @@ def test_generated_form_database(tmp_path, synth, small_database):
     assert got.mean_size.item() == pytest.approx((m * b).sum() / m.sum())
     assert got.shape_index.item() == pytest.approx(100 * m[forms_ds.is_non_cubic.values == 1].sum() / m.sum())
     assert got.group.item() == "small"
+
+
+def test_the_stone_model_is_named_and_one_per_study(tmp_path, inputs):
+    """study.nc names the cases' stone model (files from before the switch: bonded); cases
+    of two models in one study are refused, naming the file and the key."""
+    metrics, forms = inputs
+    with xr.open_dataset(aggregate(metrics, forms, tmp_path / "a.nc")) as ds:
+        assert ds.attrs["stone_model"] == "bonded"
+    for key in metrics:
+        with xr.open_dataset(metrics[key]) as f:
+            ds = f.load()
+        ds.attrs["stone_model"] = "rigid"
+        ds.to_netcdf(metrics[key])
+    with xr.open_dataset(aggregate(metrics, forms, tmp_path / "b.nc")) as ds:
+        assert ds.attrs["stone_model"] == "rigid"
+    with xr.open_dataset(metrics[("box_test", 0)]) as f:
+        ds = f.load()
+    ds.attrs["stone_model"] = "bonded"
+    ds.to_netcdf(metrics[("box_test", 0)])
+    with pytest.raises(ConfigError, match="stone_model.*one stone model in a study"):
+        aggregate(metrics, forms, tmp_path / "c.nc")
+    assert not (tmp_path / "c.nc").exists()

@@ -92,6 +92,18 @@ def _case_series(path, ds):
     return np.asarray(cycles), out, extra
 
 
+def _stone_model(metrics):
+    """The one stone model of the cases (a metrics file without the attribute is from
+    before the switch: bonded); ConfigError naming the first case of another."""
+    models = {key: ds.attrs.get("stone_model", "bonded") for key, (_, ds) in metrics.items()}
+    first = next(iter(models.values()))
+    for key, m in models.items():
+        if m != first:
+            raise ConfigError(metrics[key][0], "stone_model", f"{m!r}, but other cases ran {first!r}; "
+                              "allowed: one stone model in a study")
+    return first
+
+
 def _stages_at_limit(ds):
     """How many of the case's assembly stages stopped at their step limit (the rig layout
     its metrics file carries); -1 where the file does not record it."""
@@ -147,6 +159,7 @@ def build_study(metrics, forms, groups=None):
     if not all(isinstance(c, (int, np.integer)) for c in cases):
         cases = [str(c) for c in cases]
     series = {key: _case_series(path, ds) for key, (path, ds) in metrics.items()}
+    model = _stone_model(metrics)
     cycles = np.unique(np.concatenate([s[0] for s in series.values()]))
     extra_names = sorted(set.intersection(*(set(s[2]) for s in series.values())))
     shape = (len(dbs), len(cases), len(cycles))
@@ -194,6 +207,7 @@ def build_study(metrics, forms, groups=None):
         "mean_size_definition": MEAN_SIZE_DEFINITION,
         "database_coordinates_source": "generated values of the form database (forms.validate.validation_row)",
         "padding": "NaN where a case ran fewer cycles or has no metrics file; see cycles_run",
+        "stone_model": model,
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
