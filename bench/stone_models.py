@@ -95,7 +95,7 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="1 warm + 3 timed cycles a row")
     ap.add_argument("--first-loading-inertial-number", type=float, default=1e-3,
                     help="biaxial: cycle 0's first loading (untimed; the config's 1.5e-5 "
-                    "takes ~16 M bonded steps on a full specimen); None-like 0 = the config's")
+                    "takes ~16 M bonded steps on a full specimen); 0: the config's")
     ap.add_argument("--deviator-max-kPa", type=float, help="biaxial: q_max of the cycles "
                     "instead of the config's (a bound both models' specimens carry)")
     a = ap.parse_args(argv)

@@ -16,14 +16,21 @@ from .integrate import in_domain
 from .jit import NO_NRT
 
 
-def mass_properties(x, y, r, rho, thick):
-    """Pebble-sum mass, centre of mass and polar moment of inertia about it."""
-    m = rho * np.pi * r ** 2 * thick
+def pebble_sums(m, x, y, own_inertia):
+    """Mass, centre of mass and polar moment of inertia about it of pebbles of masses
+    ``m`` at (x, y) with their own moments ``own_inertia`` (sums: overlaps count twice)."""
     mt = m.sum()
     cx = (m * x).sum() / mt
     cy = (m * y).sum() / mt
-    inertia = (0.5 * m * r ** 2 + m * ((x - cx) ** 2 + (y - cy) ** 2)).sum()
+    inertia = (own_inertia + m * ((x - cx) ** 2 + (y - cy) ** 2)).sum()
     return mt, cx, cy, inertia
+
+
+def mass_properties(x, y, r, rho, thick):
+    """Pebble-sum mass, centre of mass and polar moment of inertia about it of disks of
+    density rho."""
+    m = rho * np.pi * r ** 2 * thick
+    return pebble_sums(m, x, y, 0.5 * m * r ** 2)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -304,18 +304,23 @@ def ball_springs(law, run, balls, pr, wp, wmat, bonds):
     """(k_tr, k_rot) of every ball: its springs over every pair of the Verlet lists
     (touching or about to touch: conservative until the next rebuild; the flat-jointed
     pairs the list leaves out count as if in it) and bonds; k_tr sums k_n + k_s, k_rot
-    sums k_s R^2 + k_r (the law's stiffnesses)."""
+    sums k_s R^2 + k_r (the law's stiffnesses). A clump's pebbles are the clump's business
+    (clump_springs): what touches only pebbles is skipped, so their rows are partial."""
     prm = run.prm
     rad = balls.rad
     mat = balls.mat
+    clump = balls.clump
     n = rad.shape[0]
     t = prm[P.THICK]
     ktr = np.zeros(n)
     krot = np.zeros(n)
     for p in range(pr.n[0]):
-        _add_pair_springs(law, run.coef, rad, mat, t, pr.i[p], pr.j[p], ktr, krot)
+        if clump[pr.i[p]] < 0 or clump[pr.j[p]] < 0:
+            _add_pair_springs(law, run.coef, rad, mat, t, pr.i[p], pr.j[p], ktr, krot)
     for q in range(wp.n[0]):
         i = wp.i[q]
+        if clump[i] >= 0:
+            continue
         r = rad[i]
         kn, ks, kr = contact_stiffness(law, coefficient_row(run.coef, wmat[wp.s[q]], mat[i]),
                                        0.0, r, t)
@@ -327,8 +332,9 @@ def ball_springs(law, run, balls, pr, wp, wmat, bonds):
             continue
         i = bonds.i[b]
         j = bonds.j[b]
-        if _within_skin(balls.pos0, rad, i, j, skin) and (balls.clump[i] < 0
-                                                          or balls.clump[i] != balls.clump[j]):
+        if clump[i] >= 0 and clump[j] >= 0:
+            continue
+        if _within_skin(balls.pos0, rad, i, j, skin):
             # a pair the Verlet list leaves out for its flat joint (neighbours.py): its
             # contact springs count as in the list, ready for when the joint goes
             _add_pair_springs(law, run.coef, rad, mat, t, i, j, ktr, krot)

@@ -18,7 +18,7 @@ from . import output
 from . import params as P
 from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
-from .clumps import mass_properties
+from .clumps import mass_properties, pebble_sums
 from .control import Control
 from .bound import clump_stiffness, springs, stepper, timestep
 from .engine import rebuild_lists
@@ -218,22 +218,32 @@ class Simulation:
         self.balls.clump[ids] = cid
         self.balls.offset[ids] = np.column_stack([x - cx, y - cy])
         self.balls.minv[ids] = 1.0 / m        # dashpot effective mass = clump mass
-        # pebbles follow the clump (theta = 0 at creation)
-        off = self.balls.offset[ids]
-        self.balls.pos[ids] = (cx, cy) + off
-        self.balls.vel[ids] = np.asarray(vel, float) + omega * np.column_stack([-off[:, 1], off[:, 0]])
-        self.balls.omega[ids] = omega
+        self._follow_clumps(ids)
         self.balls.pos0[ids] = self.balls.pos[ids]
         return cid
+
+    def _follow_clumps(self, ids):
+        """Pebbles ``ids`` placed and moving with their clumps' rigid motion, as the
+        kernels' place_pebbles does every step (theta = 0: the offsets as they are)."""
+        b, c = self.balls, self.clumps
+        k = b.clump[ids]
+        cs, sn = np.cos(c.theta[k]), np.sin(c.theta[k])
+        ox, oy = b.offset[ids, 0], b.offset[ids, 1]
+        rx = cs * ox - sn * oy
+        ry = sn * ox + cs * oy
+        b.pos[ids] = c.pos[k] + np.column_stack([rx, ry])
+        b.vel[ids] = c.vel[k] + c.omega[k][:, None] * np.column_stack([-ry, rx])
+        b.omega[ids] = c.omega[k]
 
     def make_clumps(self, groups):
         """Each group of live free balls (ball ids) becomes one free rigid clump of those
         balls as its pebbles, in place (ids, stones, materials, contacts and their history
-        kept): mass properties from pebble sums of the balls' masses (clumps.py); the group's linear and angular
-        momentum kept exactly (v = sum m v / M, omega = L_c / I_c), which is the rigid
-        motion of least kinetic energy with that momentum, so none is added. Bonds among a
-        group's balls become inactive (a rigid body has no internal springs) and stay in
-        the bond arrays as the record of which balls were joined. Returns the clump ids."""
+        kept): mass properties from pebble sums of the balls' own masses (clumps.py); the
+        group's linear and angular momentum kept (v = sum m v / M, omega = L_c / I_c),
+        which is the rigid motion of least kinetic energy with that momentum, so none is
+        added. Bonds among a group's balls become inactive (a rigid body has no internal
+        springs) and stay in the bond arrays as the record of which balls were joined.
+        Returns the clump ids."""
         b = self.balls
         ids = []
         for g in groups:
@@ -241,23 +251,17 @@ class Simulation:
             if len(g) == 0 or not (b.alive[g] == 1).all() or (b.clump[g] >= 0).any():
                 raise ValueError("make_clumps: every group must be non-empty live free balls")
             mi, x, y = b.mass[g], b.pos[g, 0], b.pos[g, 1]
-            m = mi.sum()                  # as mass_properties, on the balls' own masses
-            cx = (mi * x).sum() / m
-            cy = (mi * y).sum() / m
-            inertia = (b.inertia[g] + mi * ((x - cx) ** 2 + (y - cy) ** 2)).sum()
+            m, cx, cy, inertia = pebble_sums(mi, x, y, b.inertia[g])
             d = np.column_stack([x - cx, y - cy])
             v = np.array([(mi * b.vel[g, 0]).sum(), (mi * b.vel[g, 1]).sum()]) / m
             spin = (b.inertia[g] * b.omega[g]
                     + mi * (d[:, 0] * b.vel[g, 1] - d[:, 1] * b.vel[g, 0])).sum()
-            w = spin / inertia
-            cid = self.clumps.append(pos=(cx, cy), vel=v, omega=w, mass=m, inertia=inertia,
-                                     held=0, damp=float(b.damp[g[0]]))
+            cid = self.clumps.append(pos=(cx, cy), vel=v, omega=spin / inertia, mass=m,
+                                     inertia=inertia, held=0, damp=float(b.damp[g[0]]))
             b.clump[g] = cid
             b.offset[g] = d
-            b.pos[g] = (cx, cy) + d       # as placed from now on (round-off)
             b.minv[g] = 1.0 / m           # dashpot effective mass = clump mass
-            b.vel[g] = v + w * np.column_stack([-d[:, 1], d[:, 0]])
-            b.omega[g] = w
+            self._follow_clumps(g)        # placed as the kernels will (round-off)
             ids.append(cid)
         bd = self.bonds
         inner = (b.clump[bd.i] >= 0) & (b.clump[bd.i] == b.clump[bd.j])
@@ -297,15 +301,7 @@ class Simulation:
         rigid = np.flatnonzero(stone & (c.held == 0))
         if rigid.size:
             c.vel[rigid] += rng.normal(0.0, sd, (rigid.size, 2))
-            peb = np.isin(b.clump, rigid)
-            b.vel[peb] = c.vel[b.clump[peb]] + self._spin_velocity(peb)
-
-    def _spin_velocity(self, peb):
-        """omega x r of the pebbles ``peb`` (bool) about their clumps' centres, as placed."""
-        b, c = self.balls, self.clumps
-        w = c.omega[b.clump[peb]]
-        r = b.pos[peb] - c.pos[b.clump[peb]]
-        return np.column_stack([-w * r[:, 1], w * r[:, 0]])
+            self._follow_clumps(np.flatnonzero(np.isin(b.clump, rigid)))
 
     def apply_force(self, ids, f):
         """Constant external force on balls ``ids`` (pebbles: passed to their clump) until
@@ -422,8 +418,8 @@ class Simulation:
 
     def set_density_scaling(self, dt=None):
         """Fixed timestep ``dt`` with density scaling: at every neighbour rebuild each free
-        ball's and free clump's inertial mass (and moment) is raised so that ``dt`` is stable, while gravity
-        acts on the real mass. ``None``: back to the automatic critical timestep and the
+        ball's and free clump's inertial mass (and moment) is raised so that ``dt`` is
+        stable, while gravity acts on the real mass. ``None``: back to the automatic critical timestep and the
         real inertial masses."""
         p, b = self.prm, self.balls
         if dt is None:

@@ -1,6 +1,6 @@
 """What a stone model answers (stones/__init__.py): the stones made in the engine, their
 topology (which balls hold together now), and what can break and what broke."""
-import numpy as np
+from abc import ABC, abstractmethod
 
 from ..dem.fragments import fragments as label_fragments
 
@@ -9,33 +9,34 @@ class StoneModelError(ValueError):
     """An unknown model, or a model asked for what it cannot do."""
 
 
-class StoneModel:
-    """The interface; a model overrides every method. ``name`` is its registry key."""
+class StoneModel(ABC):
+    """The interface: a model defines every abstract method (one that does not cannot be
+    made); ``name`` is its registry key."""
     name = ""
     description = ""
     has_flat_joints = False         # what a modifier acting on flat joints needs
 
+    @abstractmethod
     def make(self, sim, stone_balls):
         """Turn the assembled (bonded) stones of balls ``stone_balls`` into this model's."""
-        raise NotImplementedError
 
+    @abstractmethod
     def topology(self, sim):
         """(i, j, intact): links between balls whose connected components are the
         fragments (the stones as they are now)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def breakable_units(self, sim):
         """How many units can break now (bonds, stones)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def elements_per_unit(self, sim):
         """Breakage records a unit can give: units x this = the breakage rate's
         denominator."""
-        raise NotImplementedError
 
+    @abstractmethod
     def breakages(self, sim):
         """The breakage record since the start (Simulation.breakages' columns)."""
-        raise NotImplementedError
 
     def fragments(self, sim, n_balls):
         """Fragment label of balls 0..n_balls-1 (-1: dead), numbered by lowest ball id."""

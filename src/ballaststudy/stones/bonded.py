@@ -1,6 +1,4 @@
 """Bonded stones (thesis 4.2.1, physics spec "Flat-joint bond"): the BPM as assembled."""
-import numpy as np
-
 from .base import StoneModel
 
 
@@ -13,6 +11,7 @@ class BondedStones(StoneModel):
         """The assembly's stones are already bonded ones."""
 
     def topology(self, sim):
+        """The flat joints, intact while an element of theirs is (dem.fragments)."""
         bd = sim.bonds
         return bd.i, bd.j, sim.intact_bonds()
 
@@ -25,4 +24,5 @@ class BondedStones(StoneModel):
         return int(sim.bonds.state.shape[1])
 
     def breakages(self, sim):
+        """The engine's record of broken flat-joint elements."""
         return sim.breakages()

@@ -2,8 +2,8 @@
 its balls as pebbles; pebbles of one clump do not interact, so the stiff springs inside a
 stone are gone and the timestep is set by the contacts between stones (per clump:
 integrate.clump_springs). The contact law between stones, the forms and the libraries are
-the bonded model's. These stones do not break: splitting (issue 74) is not built yet, so
-the breakage record stays empty and the breakage rate is 0 by construction."""
+the bonded model's. These stones do not break: splitting is not built yet, so the
+breakage record stays empty and the breakage rate is 0 by construction."""
 import numpy as np
 
 from .base import StoneModel
@@ -15,7 +15,7 @@ class RigidStones(StoneModel):
 
     def make(self, sim, stone_balls):
         """One clump per fragment (bond-connected group) of the live ``stone_balls``:
-        momentum kept, the bonds inside taken out (Simulation.make_clumps)."""
+        momentum kept, the joints inside made inactive (Simulation.make_clumps)."""
         ids = np.asarray(stone_balls, np.int64)
         n = int(ids.max()) + 1 if len(ids) else 0
         f = sim.fragments(n)[ids]
@@ -38,6 +38,7 @@ class RigidStones(StoneModel):
         return int(len(np.unique(b.clump[stone])))
 
     def elements_per_unit(self, sim):
+        """A stone splits once per record."""
         return 1
 
     def breakages(self, sim):
