@@ -3,7 +3,7 @@ segment contacts at joints, flat-joint strip integrals."""
 import numpy as np
 
 from ballaststudy.dem.bonds import strip_integrals
-from ballaststudy.dem.neighbours import build_pairs, build_wall_pairs, merge_history
+from ballaststudy.dem.neighbours import build_pairs, build_wall_pairs, carry_rows, match_rows
 
 
 def brute_pairs(pos, rad, alive, clump, skin):
@@ -42,9 +42,14 @@ def test_history_follows_pairs_across_rebuild():
     old_h = np.array([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0], [7.0, 8.0]])
     new_i = np.array([0, 1, 2, 3], np.int32)
     new_j = np.array([4, 2, 3, 5], np.int32)
+    found = match_rows(old_i, old_j, 4, new_i, new_j, 4, 6)
+    assert found.tolist() == [1, 2, -1, 3]
     out = np.full((4, 2), -1.0)
-    merge_history(old_i, old_j, old_h, 4, new_i, new_j, 4, out, 6)
+    carry_rows(found, old_h, out)
     assert out.tolist() == [[3.0, 4.0], [5.0, 6.0], [0.0, 0.0], [7.0, 8.0]]
+    lap = np.full(4, -1.0)
+    carry_rows(found, np.array([0.1, 0.2, 0.3, 0.4]), lap)
+    assert lap.tolist() == [0.2, 0.3, 0.0, 0.4]
 
 
 def test_wall_pairs_brute_force():

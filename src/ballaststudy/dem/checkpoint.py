@@ -12,11 +12,12 @@ import tempfile
 import numpy as np
 
 from .law import ContactLaw
-from .state import Balls, Bonds, BreakLog, Clumps, Pairs, WallPairs, Walls
+from .params import new_params
+from .state import Balls, Bonds, BreakLog, Clumps, Pairs, SplitLog, WallPairs, Walls
 
 _PARTS = (("balls", Balls, "b_"), ("walls", Walls, "w_"), ("clumps", Clumps, "c_"),
           ("pairs", Pairs, "p_"), ("wpairs", WallPairs, "q_"), ("bonds", Bonds, "f_"),
-          ("log", BreakLog, "l_"))
+          ("log", BreakLog, "l_"), ("splits", SplitLog, "k_"))
 _ARRAYS = ("prm", "cnt", "eacc", "err", "coef")
 _META = ("skin", "domain", "n_elements", "_prepared")
 FORMAT = 3      # bump when the saved arrays change
@@ -58,6 +59,7 @@ def load_state(path, sim):
         setattr(sim, attr, cls.from_dict(d, prefix))
     for name in _ARRAYS:
         setattr(sim, name, np.array(d["s_" + name]))
+    sim.prm = np.concatenate([sim.prm, new_params()[len(sim.prm):]])   # parameters added since
     for k in _META:
         v = meta[k]
         setattr(sim, k, tuple(v) if isinstance(v, list) else v)

@@ -39,16 +39,21 @@ def contact_opened(hist, fn, fs, p, width):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def pair_contact(law, c, thick, dt, kin, i, j, hist, p_fn, p_fs, p):
+def pair_contact(law, c, thick, dt, kin, i, j, hist, p_fn, p_fs, p_lap0, p):
     """Contact of list entry p between balls i < j (coefficient row ``c`` of their
-    materials): frame, force from the law, opening.
+    materials): frame, force from the law on the overlap beyond ``p_lap0[p]`` (two pieces
+    of one split stone: Pairs), which follows the overlap down as they part, opening.
     Returns (touching, fx, fy on j, moment on i, moment on j, dashpot, slip, rolling work)."""
     dx = kin[j, 0] - kin[i, 0]
     dy = kin[j, 1] - kin[i, 1]
     d2 = dx * dx + dy * dy
     ri = kin[i, 5]
     rj = kin[j, 5]
-    rs = ri + rj
+    lap0 = p_lap0[p]
+    if lap0 > 0.0:
+        lap0 = max(0.0, min(lap0, ri + rj - math.sqrt(d2)))
+        p_lap0[p] = lap0
+    rs = ri + rj - lap0
     if d2 >= rs * rs:
         contact_opened(hist, p_fn, p_fs, p, lf(law, WIDTH))
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -83,7 +88,7 @@ def pair_forces(law, run, kin, fa, pr, b_active):
     dt = run.prm[P.DT]
     thick = run.prm[P.THICK]
     # arrays out of their containers once (no per-pair attribute lookups)
-    p_i, p_j, hist, p_bond, p_fn, p_fs = pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs
+    p_i, p_j, hist, p_bond, p_fn, p_fs, p_lap0 = pr.i, pr.j, pr.hist, pr.bond, pr.fn, pr.fs, pr.lap0
     bonds = b_active.shape[0] > 0
     c, ma, mb = coefficient_row(coef, 0, 0), -1, -1    # reloaded when the materials change
     ed = 0.0
@@ -98,7 +103,7 @@ def pair_forces(law, run, kin, fa, pr, b_active):
         j = p_j[p]
         c, ma, mb = cached_row(coef, c, ma, mb, int(kin[i, 7]), int(kin[j, 7]))
         touch, fx, fy, mi, mj, e1, e2, e3 = pair_contact(law, c, thick, dt, kin, i, j, hist,
-                                                         p_fn, p_fs, p)
+                                                         p_fn, p_fs, p_lap0, p)
         if touch:
             fa[j, 0] += fx
             fa[j, 1] += fy
@@ -126,7 +131,7 @@ def pair_elastic_energy(law, run, balls, pr, b_active):
             continue
         ri = balls.rad[i]
         rj = balls.rad[j]
-        rs = ri + rj
+        rs = ri + rj - pr.lap0[p]
         d = math.sqrt((balls.pos[j, 0] - balls.pos[i, 0]) ** 2
                       + (balls.pos[j, 1] - balls.pos[i, 1]) ** 2)
         if d < rs:

@@ -3,8 +3,9 @@
 One step: walls move, half kick + drift (balls, clumps) + force reset -> Verlet rebuild
 if two balls (or a ball and a wall) may have closed the skin since the last build (exact
 test, see integrate.first_half) -> ball-ball contacts -> flat joints -> ball-wall
-contacts -> local damping + half kick -> clumps -> guards -> controllers (control.py,
-every ``every`` steps). Returns early with a status code when a guard trips or a
+contacts -> local damping + half kick -> clumps -> guards -> rigid stones that reached
+their strength (crushing.py, every CRUSH_EVERY steps) -> controllers (control.py, every
+``every`` steps). Returns early with a status code when a guard trips or a
 controller raises an event (after the full step). (A fused pass — each ball integrated right
 after its row of the half list — was tried and measured slower: +30 % per ball.)
 
@@ -22,6 +23,7 @@ from .bonds import bond_forces, bond_scratch
 from .clumps import gather_clumps, place_pebbles
 from .contacts import pack_kinematics, pair_forces
 from .control import EVERY, PENDING, actuate, control_step
+from .crushing import overloaded
 from .integrate import (clumps_damp_kick, critical_dt, first_half, guards, pebbles_moved,
                         second_half)
 from .neighbours import grow_rows, rebuild
@@ -33,7 +35,7 @@ from .walls import move_walls, wall_forces
 def _grown_pairs(pr, cap):
     return PairsArrays(grow_rows(pr.i, cap), grow_rows(pr.j, cap), grow_rows(pr.hist, cap),
                        grow_rows(pr.bond, cap), grow_rows(pr.fn, cap), grow_rows(pr.fs, cap),
-                       pr.n)
+                       grow_rows(pr.lap0, cap), pr.n)
 
 
 @njit(cache=True, error_model="numpy")
@@ -89,6 +91,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
     has_clumps = clumps.pos.shape[0] > 0
     pebbles = np.nonzero(balls.clump >= 0)[0]     # a clump's balls, ascending
     controlled = ctl.cfg[EVERY] > 0
+    crush_every = int(prm[P.CRUSH_EVERY]) if has_clumps else 0
     if controlled and ctl.cfg[PENDING] > 0:     # velocities an event left pending
         actuate(clumps, walls, ctl)
     for k in range(nsteps):
@@ -126,8 +129,12 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
             suspect |= place_pebbles(prm, kin, balls, clumps, pebbles)
         st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
-        if st == P.OK and controlled and control_step(prm, cnt[0], clumps, walls, ctl):
-            st = P.CONTROL_EVENT
+        if st == P.OK and crush_every > 0 and cnt[0] % crush_every == 0 \
+                and overloaded(prm, kin, balls, clumps, pr, wp, walls.seg):
+            st = P.STONES_OVERLOADED      # (a controller's event at this step wins: see
+        if st in (P.OK, P.STONES_OVERLOADED) and controlled \
+                and control_step(prm, cnt[0], clumps, walls, ctl):
+            st = P.CONTROL_EVENT          # Simulation._run_kernel, which splits then too)
         if st != P.OK:
             _write_back(kin, fa, balls)
             return st, k + 1, pr, wp

@@ -179,25 +179,32 @@ def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s, clear):
 
 
 @njit(cache=True, error_model="numpy")
-def merge_history(old_i, old_j, old_h, n_old, new_i, new_j, n_new, out_h, n_rows):
-    """out_h[k] = history of (new_i[k], new_j[k]) in the old list (grouped by i), else 0.
+def match_rows(old_i, old_j, n_old, new_i, new_j, n_new, n_rows):
+    """found[k] = row of (new_i[k], new_j[k]) in the old list (grouped by i), else -1.
     Rows are short, so a linear search in the old row of i is the fastest match."""
     row = np.zeros(n_rows + 1, np.int64)
     for a in range(n_old):
         row[old_i[a] + 1] += 1
     for i in range(n_rows):
         row[i + 1] += row[i]
-    nc = out_h.shape[1]
+    found = np.full(n_new, -1, np.int64)
     for k in range(n_new):
-        i = new_i[k]
         j = new_j[k]
-        found = -1
-        for a in range(row[i], row[i + 1]):
+        for a in range(row[new_i[k]], row[new_i[k] + 1]):
             if old_j[a] == j:
-                found = a
+                found[k] = a
                 break
-        for c in range(nc):
-            out_h[k, c] = old_h[found, c] if found >= 0 else 0.0
+    return found
+
+
+@njit(cache=True, error_model="numpy")
+def carry_rows(found, old, out):
+    """out[k] = old[found[k]] (zero where found[k] < 0), rows of a 1- or 2-D array."""
+    for k in range(found.shape[0]):
+        if found[k] >= 0:
+            out[k] = old[found[k]]
+        else:
+            out[k] = 0.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -256,15 +263,16 @@ def rebuild(prm, balls, pr, wp, bonds, seg):
     wcnt = build_wall_pairs(pos, balls.rad, balls.alive, seg, skin, nw_i, nw_s, balls.clear)
     if wcnt < 0:
         return 2, -wcnt
-    cnt = _drop_flat_jointed(new_i, new_j, cnt, bonds, pr.bond)   # merge_history reads no bond
-    old_h = pr.hist[:n_old].copy()
-    merge_history(pr.i, pr.j, old_h, n_old, new_i, new_j, cnt, pr.hist, pos.shape[0])
+    cnt = _drop_flat_jointed(new_i, new_j, cnt, bonds, pr.bond)   # match_rows reads no bond
+    found = match_rows(pr.i, pr.j, n_old, new_i, new_j, cnt, pos.shape[0])
+    carry_rows(found, pr.hist[:n_old].copy(), pr.hist)
+    carry_rows(found, pr.lap0[:n_old].copy(), pr.lap0)
     for k in range(cnt):
         pr.i[k] = new_i[k]
         pr.j[k] = new_j[k]
     pr.n[0] = cnt
-    old_wh = wp.hist[:wn_old].copy()
-    merge_history(wp.i, wp.s, old_wh, wn_old, nw_i, nw_s, wcnt, wp.hist, pos.shape[0])
+    found = match_rows(wp.i, wp.s, wn_old, nw_i, nw_s, wcnt, pos.shape[0])
+    carry_rows(found, wp.hist[:wn_old].copy(), wp.hist)
     for k in range(wcnt):
         wp.i[k] = nw_i[k]
         wp.s[k] = nw_s[k]

@@ -24,7 +24,14 @@ TIME = 21         # simulated time [s]
 WALL_TRAVEL = 23  # wall endpoint travel since the last neighbour build [m]
 SHIFT_X = 24      # common displacement estimate c (mean of the previous step) [m]
 SHIFT_Y = 25
-NPRM = 26
+# rigid stones that split (crushing.py); CRUSH_EVERY = 0: none split
+CRUSH_EVERY = 26  # stone stresses checked at steps that are multiples of this [-]
+CRUSH_SIGMA0 = 27  # Weibull characteristic strength of a stone of diameter CRUSH_D0 [Pa]
+CRUSH_M = 28      # Weibull modulus [-]
+CRUSH_D0 = 29     # reference diameter [m]
+CRUSH_SEED = 30   # seed of the strength streams [-]
+CRUSH_FINES = 31  # pieces of an equivalent diameter below this are fines (removed) [m]
+NPRM = 32
 
 # energy accumulator slots (``energy_acc`` array)
 E_DASHPOT = 0     # work dissipated by contact dashpots [J]
@@ -43,6 +50,7 @@ NAN_FOUND = 3
 RUNAWAY = 4
 LEFT_DOMAIN = 5
 CONTROL_EVENT = 6     # a controller (control.py) asks the caller to react
+STONES_OVERLOADED = 7  # a rigid stone reached its strength: the caller splits it
 STATUS_TEXT = {NAN_FOUND: "NaN/Inf in ball state", RUNAWAY: "runaway velocity",
                LEFT_DOMAIN: "ball left the domain"}
 

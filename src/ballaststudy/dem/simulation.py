@@ -14,7 +14,7 @@ from dataclasses import fields
 
 import numpy as np
 
-from . import output
+from . import crushing, output
 from . import params as P
 from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
@@ -25,7 +25,7 @@ from .engine import rebuild_lists
 from .integrate import reset_forces
 from .law import ContactLaw
 from .materials import ContactMaterial
-from .state import Balls, Bonds, BreakLog, Clumps, Pairs, RunState, WallPairs, Walls
+from .state import Balls, Bonds, BreakLog, Clumps, Pairs, RunState, SplitLog, WallPairs, Walls
 from .submodels import NCOEF, contact_stiffness
 
 _NO_CONTROL = Control.empty()
@@ -93,6 +93,7 @@ class Simulation:
         self.wpairs = WallPairs.empty(64, law.width)
         self.bonds = self._empty_bonds()
         self.log = BreakLog()
+        self.splits = SplitLog()
         self.cnt = np.array([0, 0, 1], np.int64)      # step, neighbour builds, rebuild flag
         self.eacc = np.zeros(P.NENERGY)
         self.err = np.zeros(2)
@@ -394,6 +395,13 @@ class Simulation:
         self._touch()
         return int(gone.sum())
 
+    def enable_crushing(self, clumps, sigma0, m, d0, seed, fines_diameter=0.0, every=100):
+        """Free clumps ``clumps`` split when their characteristic stress reaches a Weibull
+        strength (sigma0 [Pa] at equivalent diameter d0 [m], modulus m; crushing.py),
+        checked every ``every`` steps; pieces below ``fines_diameter`` [m] are removed as
+        fines. The record: ``split_log``."""
+        crushing.enable(self, clumps, sigma0, m, d0, seed, fines_diameter, every)
+
     def scale_bond_strength(self, factor, bonds=None):
         """Multiply tensile strength and cohesion of ``bonds`` (default all) by factor."""
         idx = slice(None) if bonds is None else bonds
@@ -642,25 +650,30 @@ class Simulation:
         done = 0
         while done < n_steps:
             k = min(every, n_steps - done)
-            self.prepare()
-            status = self._run_kernel(k, ctl)
-            if status == P.CONTROL_EVENT:
-                break
-            done += k
+            while k > 0:              # a split (crushing.py) stops the kernel mid-chunk
+                self.prepare()
+                status, steps = self._run_kernel(k, ctl)
+                if status == P.CONTROL_EVENT:
+                    return self
+                k -= steps
+                done += steps
             if callback is not None and callback(self):
                 break
         return self
 
     def _run_kernel(self, k, ctl=None):
         b = self.balls
-        status, _, pr, wp = stepper(self._layout)(
+        status, steps, pr, wp = stepper(self._layout)(
             k, self._run_state(), b.kernel(), self.walls.kernel(), self.clumps.kernel(),
             self.pairs.kernel(), self.wpairs.kernel(), self.bonds.kernel(), self.log.kernel(),
             _NO_CONTROL if ctl is None else ctl)
         self.pairs.take(pr)
         self.wpairs.take(wp)
-        if status == P.CONTROL_EVENT:
-            return status
+        every = int(self.prm[P.CRUSH_EVERY])
+        if status in (P.STONES_OVERLOADED, P.CONTROL_EVENT) and every and self.step % every == 0:
+            crushing.split_overloaded(self)    # the kernel's check, or one an event pre-empted
+        if status in (P.CONTROL_EVENT, P.STONES_OVERLOADED):
+            return status, steps
         if status != P.OK:
             i, v = int(self.err[0]), float(self.err[1])
             raise SimulationError(
@@ -668,7 +681,7 @@ class Simulation:
                 f"ball {i} (stone {int(b.stone[i])}, clump {int(b.clump[i])}), value {v:.6g}; "
                 f"pos {b.pos[i].tolist()}, vel {b.vel[i].tolist()}, domain {self.domain}, "
                 f"vmax {self.prm[P.VMAX]:g}; all offending balls: {self._offenders()}")
-        return status
+        return status, steps
 
     def _offenders(self, limit=20):
         b, p = self.balls, self.prm
@@ -747,6 +760,11 @@ class Simulation:
     def breakages(self):
         """Breakage log (step, time, bond, elem, i, j, stone, mode, x, y, stress)."""
         return output.breakages(self)
+
+    def split_log(self):
+        """Every split of a rigid stone so far (state.SplitLog's columns)."""
+        n = len(self.splits)
+        return {f.name: getattr(self.splits, f.name)[:n].copy() for f in fields(self.splits)}
 
     def energies(self):
         """Kinetic, potential, elastic and dissipated energies [J]."""

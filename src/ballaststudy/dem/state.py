@@ -124,21 +124,28 @@ class Clumps(_Arrays):
     damp: np.ndarray = _z(0)          # local damping coefficient alpha [-]
     imass: np.ndarray = _z(0)         # inertial mass [kg] (density scaling may raise it)
     iinertia: np.ndarray = _z(0)      # inertial moment of inertia [kg m^2]
+    strength: np.ndarray = _z(0)      # characteristic stress at which it splits [Pa] (inf: never)
+    gen: np.ndarray = _z(0, dtype=np.int32)   # splits between the assembled stone and this piece
 
     def __len__(self):
         return self.pos.shape[0]
 
     @classmethod
     def from_dict(cls, d, prefix):
-        """Checkpoints written before the inertial columns existed: real = inertial."""
+        """Checkpoints written before the inertial and strength columns existed: real =
+        inertial, unbreakable, generation 0."""
         d = dict(d)
         for name, real in (("imass", "mass"), ("iinertia", "inertia")):
             d.setdefault(prefix + name, d[prefix + real])
+        n = len(d[prefix + "mass"])
+        d.setdefault(prefix + "strength", np.full(n, np.inf))
+        d.setdefault(prefix + "gen", np.zeros(n, np.int32))
         return super().from_dict(d, prefix)
 
     def append(self, **cols):
         cols.setdefault("imass", cols["mass"])
         cols.setdefault("iinertia", cols["inertia"])
+        cols.setdefault("strength", np.inf)
         n0 = len(self)
         for f in fields(self):
             setattr(self, f.name, _grow(getattr(self, f.name), n0 + 1))
@@ -152,20 +159,31 @@ class Pairs(_Arrays):
     """Verlet list of ball-ball pairs (i < j, grouped by ascending i). ``hist`` = the contact
     law's per-contact columns: its sub-models' history (reset when the contact opens), then
     their persistent state (law.ContactLaw.width); ``bond`` = flat-joint index of the pair or
-    -1; ``fn``/``fs`` = last normal/shear force (for output and energies)."""
+    -1; ``fn``/``fs`` = last normal/shear force (for output and energies); ``lap0`` = the
+    overlap two pebbles of one stone had when a split put them in two pieces: the contact
+    acts on the overlap beyond it only, and it shrinks to the overlap as they part (0: none).
+    """
     i: np.ndarray = _z(0, dtype=np.int32)
     j: np.ndarray = _z(0, dtype=np.int32)
     hist: np.ndarray = _z(0, 2)
     bond: np.ndarray = _z(0, dtype=np.int32)
     fn: np.ndarray = _z(0)
     fs: np.ndarray = _z(0)
+    lap0: np.ndarray = _z(0)
     n: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
 
     @classmethod
     def empty(cls, cap, width):
         return cls(np.zeros(cap, np.int32), np.zeros(cap, np.int32), np.zeros((cap, width)),
-                   np.full(cap, -1, np.int32), np.zeros(cap), np.zeros(cap),
+                   np.full(cap, -1, np.int32), np.zeros(cap), np.zeros(cap), np.zeros(cap),
                    np.zeros(1, np.int64))
+
+    @classmethod
+    def from_dict(cls, d, prefix):
+        """Checkpoints written before splits existed: no sibling overlaps."""
+        d = dict(d)
+        d.setdefault(prefix + "lap0", np.zeros(len(d[prefix + "fn"])))
+        return super().from_dict(d, prefix)
 
 
 @dataclass
@@ -240,7 +258,48 @@ class BreakLog(_Arrays):
                     setattr(self, f.name, _grow(getattr(self, f.name), cap))
 
 
-for _cls in (Balls, Walls, Clumps, Pairs, WallPairs, Bonds, BreakLog):
+@dataclass
+class SplitLog(_Arrays):
+    """Every split of a rigid stone (dem/crushing.py): step, time, the clump split
+    (``parent``; it keeps the piece holding its lowest ball id) and the new one
+    (``child``), the assembled stone, the parent's generation, the characteristic stress
+    and the strength it reached [Pa], the split line's direction, the pieces' pebbles and
+    masses [kg], and the mass removed as fines [kg] (pieces below the fines size)."""
+    step: np.ndarray = _z(0, dtype=np.int64)
+    time: np.ndarray = _z(0)
+    parent: np.ndarray = _z(0, dtype=np.int32)
+    child: np.ndarray = _z(0, dtype=np.int32)
+    stone: np.ndarray = _z(0, dtype=np.int32)
+    gen: np.ndarray = _z(0, dtype=np.int32)
+    stress: np.ndarray = _z(0)
+    strength: np.ndarray = _z(0)
+    ux: np.ndarray = _z(0)
+    uy: np.ndarray = _z(0)
+    n_parent: np.ndarray = _z(0, dtype=np.int32)
+    n_child: np.ndarray = _z(0, dtype=np.int32)
+    m_parent: np.ndarray = _z(0)
+    m_child: np.ndarray = _z(0)
+    fines: np.ndarray = _z(0)
+
+    def __len__(self):
+        return self.step.shape[0]
+
+    def append(self, **cols):
+        n0 = len(self)
+        for f in fields(self):
+            setattr(self, f.name, _grow(getattr(self, f.name), n0 + 1))
+        for name, v in cols.items():
+            getattr(self, name)[n0] = v
+
+    @classmethod
+    def from_dict(cls, d, prefix):
+        """Checkpoints written before splits existed: an empty log."""
+        if prefix + "step" not in d:
+            return cls()
+        return super().from_dict(d, prefix)
+
+
+for _cls in (Balls, Walls, Clumps, Pairs, WallPairs, Bonds, BreakLog, SplitLog):
     _cls.Arrays = namedtuple(_cls.__name__ + "Arrays", [f.name for f in fields(_cls)])
     _cls.Arrays.__module__ = __name__
     globals()[_cls.Arrays.__name__] = _cls.Arrays     # importable by name (numba cache)

@@ -1,0 +1,324 @@
+"""Rigid stones that split: the second family of breakage models of the thesis' ch. 2
+(a stone that meets a failure criterion is replaced by smaller pieces), on clumps of
+pebbles. The choices, argued in docs/stone-models/splitting-plan.md:
+
+- Criterion: the characteristic stress sigma_c = F_max / (d t) of a stone, F_max the
+  largest total force one neighbouring body (a stone, a ball, a wall segment) exerts on it,
+  d = sqrt(4 A / pi) its equivalent diameter, A the pebble-sum area (the measure the
+  pebble-sum mass uses; overlaps count twice, calibrated away by the crushing test). de
+  Bono and McDowell (2016): of the major principal, mean and largest-contact-force
+  criteria only the last gave normal compression lines; summing the pebble contacts per
+  neighbour makes F_max the force between two stones, not between two pebbles.
+- Strength: Weibull with a weakest-link size effect, survival exp(-(A/A0)(sigma/sigma0)^m),
+  so a stone of diameter d has characteristic strength sigma0 (d/d0)^(-2/m) (2D; 3D
+  is -3/m, geoLAMMPS fix crushing). Each piece draws its own from a counter-based stream
+  keyed on (seed, its lowest ball id, generation): no dependence on the order stones break.
+- Split: a line through the centre of mass along the most compressive principal direction
+  of the stone's average stress (1/A) sum f (x) r (a Brazilian disk splits along its
+  loading axis), pebbles partitioned by side; turned 90 deg if one side is empty.
+- The pieces start with the parent's rigid motion at their own centres (momentum and
+  angular momentum kept, kinetic energy split exactly); sibling pebbles that overlap keep
+  that overlap as Pairs.lap0 (no energy injected); pieces below CRUSH_FINES in equivalent
+  diameter are fines: their pebbles are removed, their mass logged, their clump held at
+  rest.
+- Decided in the kernel (engine.run_steps) at steps that are multiples of CRUSH_EVERY, so
+  a run splits at the same steps however it is chunked or resumed; the split itself is
+  done here, between two steps.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+from . import params as P
+from .clumps import pebble_sums
+from .neighbours import seg_closest
+
+_MASK64 = (1 << 64) - 1
+
+
+@njit(cache=True, error_model="numpy")
+def stone_loads(thick, kin, clump_of, alive, pr, wp, seg, cpos):
+    """Per clump c: F_max[c] (the largest resultant of the contacts with one other body),
+    S[c] = sum f (x) (x_contact - x_c) as (xx, xy, yx, yy) [N m], and the pebble-sum area
+    A[c] [m^2]. Forces are the last step's (Pairs.fn/fs); ``kin`` rows as engine.run_steps'."""
+    n = kin.shape[0]
+    nc = cpos.shape[0]
+    nbody = nc + n + seg.shape[0]
+    area = np.zeros(nc)
+    for i in range(n):
+        if alive[i] and clump_of[i] >= 0:
+            area[clump_of[i]] += math.pi * kin[i, 5] * kin[i, 5]
+    cap = 2 * pr.n[0] + wp.n[0]
+    key = np.empty(cap, np.int64)
+    fx = np.empty(cap)
+    fy = np.empty(cap)
+    s = np.zeros((nc, 4))
+    m = 0
+    for p in range(pr.n[0]):
+        if pr.fn[p] == 0.0 and pr.fs[p] == 0.0:
+            continue
+        i = pr.i[p]
+        j = pr.j[p]
+        a = clump_of[i] if clump_of[i] >= 0 else nc + i
+        b = clump_of[j] if clump_of[j] >= 0 else nc + j
+        if a == b or (a >= nc and b >= nc):
+            continue
+        dx = kin[j, 0] - kin[i, 0]
+        dy = kin[j, 1] - kin[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        nx = dx / d
+        ny = dy / d
+        gx = pr.fn[p] * nx - pr.fs[p] * ny       # force on j
+        gy = pr.fn[p] * ny + pr.fs[p] * nx
+        reach = kin[i, 5] - 0.5 * (kin[i, 5] + kin[j, 5] - d)
+        px = kin[i, 0] + reach * nx
+        py = kin[i, 1] + reach * ny
+        if a < nc:
+            m = _entry(a, b, nbody, -gx, -gy, px, py, cpos, key, fx, fy, s, m)
+        if b < nc:
+            m = _entry(b, a, nbody, gx, gy, px, py, cpos, key, fx, fy, s, m)
+    for q in range(wp.n[0]):
+        i = wp.i[q]
+        a = clump_of[i]
+        if a < 0 or (wp.fn[q] == 0.0 and wp.fs[q] == 0.0):
+            continue
+        sg = wp.s[q]
+        px, py, _ = seg_closest(kin[i, 0], kin[i, 1], seg[sg, 0], seg[sg, 1], seg[sg, 2], seg[sg, 3])
+        dx = kin[i, 0] - px
+        dy = kin[i, 1] - py
+        d = math.sqrt(dx * dx + dy * dy)
+        nx = dx / d
+        ny = dy / d
+        m = _entry(a, nc + n + sg, nbody, wp.fn[q] * nx - wp.fs[q] * ny,
+                   wp.fn[q] * ny + wp.fs[q] * nx, px, py, cpos, key, fx, fy, s, m)
+    fmax = np.zeros(nc)
+    order = np.argsort(key[:m])
+    k = 0
+    while k < m:
+        kk = key[order[k]]
+        sx = 0.0
+        sy = 0.0
+        while k < m and key[order[k]] == kk:
+            sx += fx[order[k]]
+            sy += fy[order[k]]
+            k += 1
+        c = kk // nbody
+        fmax[c] = max(fmax[c], math.sqrt(sx * sx + sy * sy))
+    return fmax, s, area
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _entry(a, b, nbody, gx, gy, px, py, cpos, key, fx, fy, s, m):
+    """Contact force (gx, gy) at (px, py) on clump a from body b: into the per-neighbour
+    sums and a's stress sum."""
+    key[m] = a * nbody + b
+    fx[m] = gx
+    fy[m] = gy
+    rx = px - cpos[a, 0]
+    ry = py - cpos[a, 1]
+    s[a, 0] += gx * rx
+    s[a, 1] += gx * ry
+    s[a, 2] += gy * rx
+    s[a, 3] += gy * ry
+    return m + 1
+
+
+@njit(cache=True, error_model="numpy")
+def characteristic_stress(thick, fmax, area):
+    """sigma_c = F_max / (d t), d = sqrt(4 A / pi) [Pa] (0 where A = 0)."""
+    out = np.zeros(fmax.shape[0])
+    for c in range(fmax.shape[0]):
+        if area[c] > 0.0:
+            out[c] = fmax[c] / (math.sqrt(4.0 * area[c] / math.pi) * thick)
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def overloaded(prm, kin, balls, clumps, pr, wp, seg):
+    """True if a free clump's characteristic stress reached its strength (engine.run_steps
+    asks at steps that are multiples of CRUSH_EVERY)."""
+    fmax, _, area = stone_loads(prm[P.THICK], kin, balls.clump, balls.alive, pr, wp, seg, clumps.pos)
+    sig = characteristic_stress(prm[P.THICK], fmax, area)
+    for c in range(sig.shape[0]):
+        if not clumps.held[c] and sig[c] >= clumps.strength[c]:
+            return True
+    return False
+
+
+# ---------------------------------------------------------------- strength (Python)
+def _splitmix64(x):
+    """One step of splitmix64 (Steele, Lea and Flood 2014) on a Python int."""
+    x = (x + 0x9E3779B97F4A7C15) & _MASK64
+    z = x
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _MASK64
+    return z ^ (z >> 31)
+
+
+def stream_uniform(seed, piece, generation):
+    """A uniform number in (0, 1) that depends on (seed, piece, generation) only: a
+    counter-based stream (splitmix64 of the three, chained)."""
+    z = _splitmix64(int(seed) & _MASK64)
+    z = _splitmix64(z ^ (int(piece) & _MASK64))
+    z = _splitmix64(z ^ (int(generation) & _MASK64))
+    return ((z >> 11) + 0.5) / float(1 << 53)
+
+
+def weibull_strength(u, d, sigma0, m, d0):
+    """The strength of a stone of equivalent diameter ``d`` whose survival probability is
+    ``u``: sigma0 (d/d0)^(-2/m) (-ln u)^(1/m) [Pa] (inverse of the survival law)."""
+    return sigma0 * (d / d0) ** (-2.0 / m) * (-np.log(u)) ** (1.0 / m)
+
+
+def equivalent_diameter(area):
+    return np.sqrt(4.0 * np.asarray(area) / np.pi)
+
+
+def draw_strength(prm, pebbles, rad, generation):
+    """The strength of the piece made of balls ``pebbles`` (radii ``rad``) at
+    ``generation``, from its own stream (keyed on its lowest ball id)."""
+    u = stream_uniform(prm[P.CRUSH_SEED], int(np.min(pebbles)), generation)
+    d = float(equivalent_diameter(np.pi * (np.asarray(rad) ** 2).sum()))
+    return float(weibull_strength(u, d, prm[P.CRUSH_SIGMA0], prm[P.CRUSH_M], prm[P.CRUSH_D0]))
+
+
+def enable(sim, clumps, sigma0, m, d0, seed, fines_diameter, every):
+    """Make ``clumps`` breakable: Weibull (sigma0 [Pa] at diameter d0 [m], modulus m),
+    strengths drawn for generation 0, fines below ``fines_diameter`` [m], checked every
+    ``every`` steps."""
+    if not (sigma0 > 0 and m > 0 and d0 > 0 and fines_diameter >= 0 and int(every) >= 1):
+        raise ValueError("crushing: need sigma0 > 0, m > 0, d0 > 0, fines_diameter >= 0, every >= 1")
+    p = sim.prm
+    p[P.CRUSH_EVERY], p[P.CRUSH_SIGMA0], p[P.CRUSH_M] = int(every), sigma0, m
+    p[P.CRUSH_D0], p[P.CRUSH_SEED], p[P.CRUSH_FINES] = d0, int(seed), fines_diameter
+    b = sim.balls
+    for c in clumps:
+        peb = np.flatnonzero((b.clump == c) & (b.alive == 1))
+        sim.clumps.strength[c] = draw_strength(p, peb, b.rad[peb], sim.clumps.gen[c])
+
+
+# ---------------------------------------------------------------- the split (Python)
+def loads(sim):
+    """stone_loads at the current state: (F_max, S, A) per clump."""
+    b = sim.balls
+    kin = np.column_stack([b.pos, b.vel, b.omega, b.rad, b.minv, b.mat])
+    return stone_loads(sim.prm[P.THICK], kin, b.clump, b.alive, sim.pairs.kernel(),
+                       sim.wpairs.kernel(), sim.walls.seg, sim.clumps.pos)
+
+
+def split_line(s):
+    """Unit direction of the most compressive principal stress of the stress sum ``s``
+    (xx, xy, yx, yy), symmetrised."""
+    t = np.array([[s[0], 0.5 * (s[1] + s[2])], [0.5 * (s[1] + s[2]), s[3]]])
+    w, v = np.linalg.eigh(t)
+    return v[:, 0]                      # eigh sorts ascending: the most negative first
+
+
+def partition(sim, c, u):
+    """The pebbles of clump ``c`` on either side of the line through its centre along
+    ``u``: (kept: the side holding its lowest ball id, other, the line's direction). The
+    line turns 90 deg when a side is empty; (all, empty, u) when no line splits it."""
+    b = sim.balls
+    peb = np.flatnonzero((b.clump == c) & (b.alive == 1))
+    r = b.pos[peb] - sim.clumps.pos[c]
+    for direction in (u, np.array([-u[1], u[0]])):
+        left = r[:, 1] * direction[0] - r[:, 0] * direction[1] >= 0.0
+        if left.any() and not left.all():
+            keep = left == left[0]
+            return peb[keep], peb[~keep], direction
+    return peb, peb[:0], u
+
+
+def split_overloaded(sim):
+    """Split every free clump whose characteristic stress reached its strength (called by
+    Simulation.run when the kernel says STONES_OVERLOADED). Returns how many split."""
+    fmax, s, area = loads(sim)
+    sig = characteristic_stress(sim.prm[P.THICK], fmax, area)
+    cl = sim.clumps
+    hit = np.flatnonzero((cl.held == 0) & (sig >= cl.strength))
+    pairs = []
+    for c in hit:
+        u = split_line(s[c])
+        kept, other, u = partition(sim, c, u)
+        if len(other) == 0:
+            cl.strength[c] = np.inf         # one pebble, or none: nothing to split
+            continue
+        strength, gen = float(cl.strength[c]), int(cl.gen[c])
+        child = split_clump(sim, c, other)
+        pairs.append((kept, other))
+        _log(sim, c, child, gen, sig[c], strength, u, kept, other)
+    if pairs:
+        sim._rebuild()
+        for kept, other in pairs:
+            sibling_overlaps(sim, kept, other)
+    return len(pairs)
+
+
+def split_clump(sim, c, other):
+    """Clump ``c`` loses the pebbles ``other`` to a new clump: both pieces take c's rigid
+    motion at their own centre of mass (v_f = v + w x (x_f - x_c), w_f = w), which keeps
+    mass, momentum and angular momentum and splits the kinetic energy exactly (parallel
+    axes). Both draw a strength for the next generation. Returns the new clump's id."""
+    b, cl = sim.balls, sim.clumps
+    gen = int(cl.gen[c]) + 1
+    kept = np.setdiff1d(np.flatnonzero((b.clump == c) & (b.alive == 1)), other)
+    v, w, x = cl.vel[c].copy(), float(cl.omega[c]), cl.pos[c].copy()
+    child = cl.append(pos=(0.0, 0.0), vel=(0.0, 0.0), omega=w, mass=1.0, inertia=1.0,
+                      held=0, damp=cl.damp[c])
+    for cid, peb in ((c, kept), (child, other)):
+        m, cx, cy, inertia = pebble_sums(b.mass[peb], b.pos[peb, 0], b.pos[peb, 1], b.inertia[peb])
+        cl.pos[cid] = (cx, cy)
+        cl.vel[cid] = (v[0] - w * (cy - x[1]), v[1] + w * (cx - x[0]))
+        cl.omega[cid] = w
+        cl.theta[cid] = 0.0
+        cl.mass[cid], cl.inertia[cid] = m, inertia
+        cl.imass[cid], cl.iinertia[cid] = m, inertia    # density scaling: the rebuild after
+        cl.gen[cid] = gen
+        b.clump[peb] = cid
+        b.offset[peb] = b.pos[peb] - (cx, cy)
+        b.minv[peb] = 1.0 / cl.imass[cid]
+        cl.strength[cid] = draw_strength(sim.prm, peb, b.rad[peb], gen)
+        sim._follow_clumps(peb)
+        if equivalent_diameter(np.pi * (b.rad[peb] ** 2).sum()) < sim.prm[P.CRUSH_FINES]:
+            _to_fines(sim, cid, peb)
+    sim._touch()
+    return child
+
+
+def _to_fines(sim, c, peb):
+    """A piece below the fines size leaves the model: its pebbles removed, its clump held
+    at rest (its mass stays in the clump arrays and in the split log)."""
+    sim.delete_balls(peb)
+    cl = sim.clumps
+    cl.held[c] = 1
+    cl.vel[c] = 0.0
+    cl.omega[c] = 0.0
+    cl.strength[c] = np.inf
+
+
+def sibling_overlaps(sim, kept, other):
+    """Listed pairs of one pebble from each piece that overlap get that overlap as
+    Pairs.lap0, so the split starts no spring between them."""
+    pr, b = sim.pairs, sim.balls
+    n = int(pr.n[0])
+    i, j = pr.i[:n], pr.j[:n]
+    a, o = np.isin(i, kept), np.isin(j, other)
+    cross = (a & o) | (np.isin(i, other) & np.isin(j, kept))
+    k = np.flatnonzero(cross)
+    lap = b.rad[i[k]] + b.rad[j[k]] - np.hypot(*(b.pos[j[k]] - b.pos[i[k]]).T)
+    pr.lap0[k] = np.maximum(lap, 0.0)
+
+
+def _log(sim, parent, child, gen, stress, strength, u, kept, other):
+    b, cl = sim.balls, sim.clumps
+    alive = b.alive == 1
+    gone = 0.0
+    for cid in (parent, child):
+        if cl.held[cid] and not alive[b.clump == cid].any():
+            gone += cl.mass[cid]
+    sim.splits.append(step=sim.step, time=sim.time, parent=parent, child=child,
+                      stone=int(b.stone[kept[0]]), gen=gen, stress=stress,
+                      strength=strength, ux=u[0], uy=u[1], n_parent=len(kept), n_child=len(other),
+                      m_parent=float(b.mass[kept].sum()), m_child=float(b.mass[other].sum()),
+                      fines=gone)
