@@ -6,12 +6,15 @@ level, censoring handled, and a sample that is not Weibull (all alike) not fitte
 wide one."""
 import numpy as np
 import pytest
+from scipy.stats import binom
 
 from ballaststudy.dem import crushing
 from ballaststudy.rig.crushing import crush, weibull_fit
 from ballaststudy.rig.library import Library, synthetic_library
 
 SIGMA0, M, D0 = 3e6, 4.0, 0.04
+REPLICATES = 10
+AT_LEAST = int(binom.ppf(0.02, REPLICATES, 0.9))
 
 
 def _planted(rng, n, censor_at=None):
@@ -54,13 +57,34 @@ def library():
     return Library(synthetic_library(n_stones=60, seed=4))
 
 
-def test_rigid_stones_crushed_between_platens_follow_their_weibull(library):
-    """60 stones of the synthetic library, each split at its own drawn strength: the
-    crushing test (platen force, first split) recovers the configured law."""
-    out = [crush(library, k, "rigid", seed=3, splitting=dict(sigma0=SIGMA0, m=M, d0=D0))
+def _series(library, seed):
+    out = [crush(library, k, "rigid", seed=seed, splitting=dict(sigma0=SIGMA0, m=M, d0=D0))
            for k in range(len(library))]
-    assert all(c.failed for c in out)
-    fit = weibull_fit([c.stress for c in out], [c.diameter for c in out],
-                      [c.failed for c in out], D0)
-    assert fit["m_low"] <= M <= fit["m_high"], fit
-    assert fit["sigma0"] == pytest.approx(SIGMA0, rel=0.15), fit
+    assert sum(c.failed for c in out) >= 0.9 * len(out)    # the rest censored (kept in the fit)
+    return out, weibull_fit([c.stress for c in out], [c.diameter for c in out],
+                            [c.failed for c in out], D0)
+
+
+def test_the_platens_measure_each_rigid_stones_drawn_strength(library):
+    """60 stones crushed rigid: each split is measured at or above the strength it drew,
+    by at most what the force gains between two stress checks (10 steps here: up to 11 %
+    on the stiffest contacts; the platen force at the split against the criterion's
+    largest neighbour's), and the series' fit lands near
+    the configured law (its coverage: the slow test below)."""
+    out, fit = _series(library, 1)
+    ratios = [c.stress / c.drawn for c in out if c.failed]
+    assert 0.99 < min(ratios) and max(ratios) < 1.15, (min(ratios), max(ratios))
+    assert fit["sigma0"] == pytest.approx(SIGMA0, rel=0.2) and fit["m"] == pytest.approx(M, rel=0.3), fit
+
+
+@pytest.mark.slow
+def test_rigid_stones_crushed_between_platens_follow_their_weibull(library):
+    """REPLICATES series of 60 stones (seeds 1..10, the first ten, none screened; ~4 min):
+    each series' 90 % interval of m holds the configured m in at least AT_LEAST of them
+    (fewer: < 2 % if they cover 90 %). Seed 3's misses, as its drawn strengths' own fit
+    does (m 5.1 [4.3, 5.9]): a draw, not the rig."""
+    hits = 0
+    for seed in range(1, REPLICATES + 1):
+        _, fit = _series(library, seed)
+        hits += fit["m_low"] <= M <= fit["m_high"]
+    assert hits >= AT_LEAST, hits

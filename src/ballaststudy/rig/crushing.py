@@ -11,7 +11,8 @@ measure dem/crushing.py draws strengths for), t the thickness. It has failed whe
 largest piece holds less than ``intact_share`` of the stone's mass (one rule for both
 models: a bonded stone cracks element by element and chips first, a rigid one splits at
 once; a rule on the platen force's drop was tried and fired on stones that rock on their
-first contact); sigma_f is the peak force's stress before then. A stone closed to
+first contact); sigma_f is the peak force's stress up to then (the forces read are those
+of the last step, computed before a split). A stone closed to
 ``max_strain`` without failing is right-censored.
 
 The fit: survival exp(-(d/d0)^2 (sigma/sigma0)^m) (dem/crushing.py's law), by maximum
@@ -35,7 +36,8 @@ class CrushingParams:
     clearance_m: float = 1e-4         # gap between the stone and each platen at the start
     intact_share: float = 0.9         # failed: the largest piece below this share of the mass
     max_strain: float = 0.3           # censored: closed by this share of the stone's height
-    chunk_steps: int = 50             # failure is looked for after each chunk
+    chunk_steps: int = 50             # bonded: failure looked for after each chunk (rigid:
+                                      # after each stress check: the peak is the split's force)
     F_str_co: float = 3.5             # bonded: flat-joint strength factor (Table 4.2: 3.5)
     check_every_steps: int = 10       # rigid: stresses checked every this many steps
 
@@ -48,6 +50,7 @@ class Crush:
     stress: float       # sigma_f = force / (d t) [Pa]
     failed: bool        # False: censored at max_strain
     steps: int
+    drawn: float = float("nan")   # rigid: the strength the stone drew (dem/crushing.py) [Pa]
 
 
 def _platen_sim(lib, k, angle, params):
@@ -68,7 +71,7 @@ def _platen_sim(lib, k, angle, params):
     bottom = sim.add_wall([(span, bottom_y), (-span, bottom_y)])
     sim.set_wall_velocity(top, vel=(0.0, -params.platen_speed_m_s))
     sim.set_wall_velocity(bottom, vel=(0.0, params.platen_speed_m_s))
-    return sim, ids, top, top_y - bottom_y
+    return sim, ids, top, top_y - bottom_y, span
 
 
 def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
@@ -77,7 +80,7 @@ def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
     rng = np.random.default_rng([int(seed), int(k)])
     angle = rng.uniform(0.0, 2.0 * np.pi)
     stream_seed = int(rng.integers(2 ** 62))    # each stone its own strength stream
-    sim, ids, top, height = _platen_sim(lib, k, angle, params)
+    sim, ids, top, height, span = _platen_sim(lib, k, angle, params)
     stones = stone_model(model)
     if model == "bonded":
         sim.scale_bond_strength(params.F_str_co / 3.5)
@@ -88,18 +91,22 @@ def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
     d = 2.0 * float(np.sqrt((sim.balls.rad[ids] ** 2).sum()))
     mass = sim.balls.mass[ids]
     peak, closed, failed = 0.0, 0.0, False
+    chunk = params.chunk_steps if model == "bonded" else params.check_every_steps
     while closed < params.max_strain * height:
-        sim.run(params.chunk_steps)
+        sim.run(chunk)
+        b = sim.balls
+        sim.delete_balls(np.flatnonzero((b.alive == 1) & (np.hypot(*b.pos.T) > span)))   # chips thrown off
         closed = 2.0 * params.platen_speed_m_s * sim.time
         f = float(np.hypot(*sim.wall_force(top).sum(axis=0)))   # friction included
         labels = stones.fragments(sim, len(ids))
         largest = np.bincount(labels[labels >= 0], weights=mass[labels >= 0]).max(initial=0.0)
-        broken = largest < params.intact_share * mass.sum()
-        if broken:
+        peak = max(peak, f)      # the forces of the chunk's last step: before any split
+        if largest < params.intact_share * mass.sum():
             failed = True
             break
-        peak = max(peak, f)
-    return Crush(int(k), d, peak, peak / (d * lib.thickness), failed, sim.step)
+    drawn = float(sim.clumps.strength[0]) if model != "bonded" and not len(sim.splits) else (
+        float(sim.splits.strength[0]) if len(sim.splits) else float("nan"))
+    return Crush(int(k), d, peak, peak / (d * lib.thickness), failed, sim.step, drawn)
 
 
 def weibull_fit(stress, diameter, failed, d0):
@@ -107,6 +114,8 @@ def weibull_fit(stress, diameter, failed, d0):
     failures at ``stress`` and censored stones (failed False) survived to it, and the
     profile-likelihood 90 % interval of m. Returns dict(sigma0, m, m_low, m_high, n)."""
     s, d, f = (np.asarray(a, float) for a in (stress, diameter, failed))
+    if not (s > 0).all() or not f.any():
+        raise ValueError("weibull_fit: every stress must be > 0 and at least one stone must fail")
     ref = float(np.median(s))          # stresses in units of their median: no overflow
     s = s / ref
     w = (d / d0) ** 2
