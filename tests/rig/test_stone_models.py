@@ -86,3 +86,50 @@ def test_vtk_draws_a_rigid_stones_links_as_intact(rigid_run, tmp_path):
     live = (rig.sim.balls.alive[i] == 1) & (rig.sim.balls.alive[j] == 1)
     assert len(state) == live.sum()
     assert sum(s == "0" for s in state) >= intact[live].sum() > 0
+
+
+# weak stones (sigma0 far below the contact stresses of the box's loading) so that some
+# split within two cycles: the record, the rate and the resume are what is tested here
+SPLITTING = dict(sigma0=2e5, m=3.0, d0=0.04, seed=5, fines_diameter=0.0, every=50)
+
+
+@pytest.fixture(scope="module")
+def splitting_run(assembled, tmp_path_factory):
+    rig = BoxRig.load(assembled[0])
+    rig.use_stone_model("rigid", SPLITTING)
+    ck = tmp_path_factory.mktemp("split") / "ck.npz"
+    return LoadingRun(rig, cycles=CYCLES, checkpoint=ck, checkpoint_every=1).run(), rig
+
+
+def test_rigid_stones_that_split_are_recorded_and_rated_per_stone(splitting_run):
+    run, rig = splitting_run
+    ds = to_dataset(run)
+    log = rig.sim.split_log()
+    stones = run.s.n_bonds0
+    n = len(log["step"])
+    assert n > 0 and stones == len(np.unique(rig.sim.balls.stone[rig.stone_balls()]))
+    assert ds["breakage_mode_code"].attrs["flag_meanings"] == "split"
+    assert (ds["breakage_mode_code"].values == 3).all()
+    in_cycles = int((ds["breakage_cycle"].values >= 0).sum())
+    assert ds["breakage_rate"].values[-1] == pytest.approx(
+        int((log["step"] <= ds["cycle_end_step"].values[-1]).sum()) / stones, rel=1e-12)
+    assert in_cycles <= n
+    # every split made a new clump; the fragments are the pieces
+    assert rig.fragments().max() + 1 == stones + n - int((log["fines"] > 0).sum())
+
+
+def test_a_splitting_run_resumes_bitwise_after_a_crash(splitting_run, assembled, tmp_path):
+    run, rig = splitting_run
+    ck = tmp_path / "ck.npz"
+    rig2 = BoxRig.load(assembled[0])
+    rig2.use_stone_model("rigid", SPLITTING)
+    first = LoadingRun(rig2, cycles=CYCLES, checkpoint=ck, checkpoint_every=1)
+    first.run(stop_after=1)
+    first.advance(max_steps=200)     # progress after the checkpoint that the crash loses
+    resumed = LoadingRun.from_checkpoint(ck)
+    resumed.run()
+    a, b = to_dataset(run), to_dataset(resumed)
+    for name in a.data_vars:
+        assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
+    for k, v in rig.sim.split_log().items():
+        assert np.array_equal(resumed.rig.sim.split_log()[k], v), k

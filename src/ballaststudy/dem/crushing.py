@@ -244,10 +244,10 @@ def split_overloaded(sim):
         if len(other) == 0:
             cl.strength[c] = np.inf         # one pebble, or none: nothing to split
             continue
-        strength, gen = float(cl.strength[c]), int(cl.gen[c])
+        strength, gen, centre = float(cl.strength[c]), int(cl.gen[c]), cl.pos[c].copy()
         child = split_clump(sim, c, other)
         pairs.append((kept, other))
-        _log(sim, c, child, gen, sig[c], strength, u, kept, other)
+        _log(sim, c, child, gen, sig[c], strength, centre, u, kept, other)
     if pairs:
         sim._rebuild()
         for kept, other in pairs:
@@ -310,7 +310,7 @@ def sibling_overlaps(sim, kept, other):
     pr.lap0[k] = np.maximum(lap, 0.0)
 
 
-def _log(sim, parent, child, gen, stress, strength, u, kept, other):
+def _log(sim, parent, child, gen, stress, strength, centre, u, kept, other):
     b, cl = sim.balls, sim.clumps
     alive = b.alive == 1
     gone = 0.0
@@ -319,6 +319,6 @@ def _log(sim, parent, child, gen, stress, strength, u, kept, other):
             gone += cl.mass[cid]
     sim.splits.append(step=sim.step, time=sim.time, parent=parent, child=child,
                       stone=int(b.stone[kept[0]]), gen=gen, stress=stress,
-                      strength=strength, ux=u[0], uy=u[1], n_parent=len(kept), n_child=len(other),
+                      strength=strength, x=centre[0], y=centre[1], ux=u[0], uy=u[1], n_parent=len(kept), n_child=len(other),
                       m_parent=float(b.mass[kept].sum()), m_child=float(b.mass[other].sum()),
                       fines=gone)

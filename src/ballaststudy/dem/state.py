@@ -263,8 +263,9 @@ class SplitLog(_Arrays):
     """Every split of a rigid stone (dem/crushing.py): step, time, the clump split
     (``parent``; it keeps the piece holding its lowest ball id) and the new one
     (``child``), the assembled stone, the parent's generation, the characteristic stress
-    and the strength it reached [Pa], the split line's direction, the pieces' pebbles and
-    masses [kg], and the mass removed as fines [kg] (pieces below the fines size)."""
+    and the strength it reached [Pa], the parent's centre of mass [m] and the split line's
+    direction, the pieces' pebbles and masses [kg], and the mass removed as fines [kg]
+    (pieces below the fines size)."""
     step: np.ndarray = _z(0, dtype=np.int64)
     time: np.ndarray = _z(0)
     parent: np.ndarray = _z(0, dtype=np.int32)
@@ -273,6 +274,8 @@ class SplitLog(_Arrays):
     gen: np.ndarray = _z(0, dtype=np.int32)
     stress: np.ndarray = _z(0)
     strength: np.ndarray = _z(0)
+    x: np.ndarray = _z(0)
+    y: np.ndarray = _z(0)
     ux: np.ndarray = _z(0)
     uy: np.ndarray = _z(0)
     n_parent: np.ndarray = _z(0, dtype=np.int32)

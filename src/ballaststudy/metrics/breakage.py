@@ -1,7 +1,9 @@
 """Breakage rate (thesis 4.5.1, eqs. 4.6-4.8, l. 1040-1048).
 
 BR_T = FJ_T / FJ_Total, BR_S = FJ_S / FJ_Total, BR = BR_T + BR_S, where FJ_T / FJ_S are
-the flat-joint bonds broken in tension / shear and FJ_Total all flat-joint bonds. The
+the flat-joint bonds broken in tension / shear and FJ_Total all flat-joint bonds. Rigid
+stones (stones.rigid) break by splits: a record is a split, the total the stones, and BR
+is splits per stone. The
 equations define plain ratios, so they are returned as fractions (units "1"); the thesis'
 figures quote them in percent ("smaller than 1%", l. 1228) - multiply by 100 to plot.
 
@@ -13,27 +15,34 @@ import numpy as np
 
 MODE_TENSION = 1   # same codes as ballaststudy.dem.bonds
 MODE_SHEAR = 2
-_NAMES = {"tension": MODE_TENSION, "shear": MODE_SHEAR}
+MODE_SPLIT = 3     # a rigid stone split in two (dem/crushing.py; stones.rigid)
+BREAK_MODE_CODES = {"tension": MODE_TENSION, "shear": MODE_SHEAR, "split": MODE_SPLIT}
+
+
+def mode_codes(modes):
+    """The codes of breakage modes given by name ('tension', 'shear', 'split')."""
+    return np.array([BREAK_MODE_CODES[str(m)] for m in modes], np.int8)
 
 
 def _modes(mode):
     m = np.asarray(mode)
     if m.dtype.kind in "USO":
         try:
-            m = np.array([_NAMES[str(s).lower()] for s in m], dtype=np.int64)
+            m = np.array([BREAK_MODE_CODES[str(s).lower()] for s in m], dtype=np.int64)
         except KeyError as err:
-            raise ValueError(f"breakage mode {err} is not 'tension' or 'shear'") from None
+            raise ValueError(f"breakage mode {err} is not 'tension', 'shear' or 'split'") from None
     m = m.astype(np.int64)
-    bad = ~np.isin(m, (MODE_TENSION, MODE_SHEAR))
+    bad = ~np.isin(m, (MODE_TENSION, MODE_SHEAR, MODE_SPLIT))
     if bad.any():
-        raise ValueError(f"breakage mode {m[bad][0]} is not 1 (tension) or 2 (shear)")
+        raise ValueError(f"breakage mode {m[bad][0]} is not 1 (tension), 2 (shear) or 3 (split)")
     return m
 
 
 def breakage_rate(break_mode, break_step, n_bonds_installed, cycle_bounds, n_elements_per_bond=1):
     """Cumulative breakage rates at the end of each cycle and breakages per cycle.
 
-    break_mode: (r,) per breakage record, 1/'tension' or 2/'shear'.
+    break_mode: (r,) per breakage record, 1/'tension', 2/'shear' or 3/'split' (a rigid
+        stone split: its unit is the stone, n_bonds_installed then counts stones).
     break_step: (r,) calculation step of each record.
     n_bonds_installed: flat-joint bonds installed when the stones were built (FJ_Total
         for N_r = 1).
@@ -42,7 +51,8 @@ def breakage_rate(break_mode, break_step, n_bonds_installed, cycle_bounds, n_ele
     cumulative rates - a bond broken then is broken - but in no cycle's count.
 
     Returns dict of (K,) arrays: breakage_rate_tension, breakage_rate_shear,
-    breakage_rate (fractions), breakages_per_cycle, broken_tension, broken_shear (counts).
+    breakage_rate (fractions: tension + shear + split), breakages_per_cycle, broken_tension,
+    broken_shear (counts; a rigid stone's splits are breakage_rate's and breakages_per_cycle's).
     """
     mode = _modes(break_mode)
     step = np.asarray(break_step, dtype=np.int64)
@@ -59,8 +69,9 @@ def breakage_rate(break_mode, break_step, n_bonds_installed, cycle_bounds, n_ele
     s_steps = np.sort(step[mode == MODE_SHEAR])
     n_t = np.searchsorted(t_steps, ends, side="left")   # records with step < end
     n_s = np.searchsorted(s_steps, ends, side="left")
+    n_x = np.searchsorted(np.sort(step[mode == MODE_SPLIT]), ends, side="left")
     all_steps = np.sort(step)
     cum = np.searchsorted(all_steps, bounds, side="left")
     return dict(breakage_rate_tension=n_t / total, breakage_rate_shear=n_s / total,
-                breakage_rate=(n_t + n_s) / total, breakages_per_cycle=np.diff(cum),
+                breakage_rate=(n_t + n_s + n_x) / total, breakages_per_cycle=np.diff(cum),
                 broken_tension=n_t, broken_shear=n_s)

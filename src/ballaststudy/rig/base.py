@@ -57,10 +57,11 @@ class Rig:
         its stones."""
         return stone_model(self.layout.stone_model)
 
-    def use_stone_model(self, name):
-        """Make the assembled stones the model ``name``'s (a no-op for the model they are)."""
+    def use_stone_model(self, name, splitting=None):
+        """Make the assembled stones the model ``name``'s (a no-op for the model they are;
+        ``splitting``: how rigid stones split, dem/crushing.py)."""
         if name != self.layout.stone_model:
-            stone_model(name).make(self.sim, self.stone_balls())
+            stone_model(name).make(self.sim, self.stone_balls(), splitting)
             self.layout.stone_model = name
             self.sim.prepare()      # the lists and the automatic dt of the new bodies
 

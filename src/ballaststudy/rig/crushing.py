@@ -85,9 +85,8 @@ def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
     if model == "bonded":
         sim.scale_bond_strength(params.F_str_co / 3.5)
     else:
-        stones.make(sim, ids)
-        sim.enable_crushing([0], seed=stream_seed, fines_diameter=0.0,
-                            every=params.check_every_steps, **splitting)
+        stones.make(sim, ids, dict(seed=stream_seed, fines_diameter=0.0,
+                                   every=params.check_every_steps, **splitting))
     d = 2.0 * float(np.sqrt((sim.balls.rad[ids] ** 2).sum()))
     mass = sim.balls.mass[ids]
     peak, closed, failed = 0.0, 0.0, False

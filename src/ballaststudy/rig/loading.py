@@ -26,6 +26,7 @@ import numpy as np
 from ..dem.control import Control
 from ..metrics import MetricsParams, compute_cycle
 from ..metrics.void_ratio import SolidCache
+from ..metrics.breakage import mode_codes
 from .box import BoxRig
 from .cyclic import CycleState, CyclicRun
 
@@ -254,7 +255,7 @@ class LoadingRun(CyclicRun):
             load_y=np.asarray(self.samples["y"][k0:]),
             load_force=np.asarray(self.samples["force"][k0:]),
             break_step=br["step"][s.log0:],
-            break_mode=np.where(br["mode"][s.log0:] == "tension", 1, 2).astype(np.int32),
+            break_mode=mode_codes(br["mode"][s.log0:]).astype(np.int32),
             n_bonds_installed=int(s.n_bonds0), n_elements_per_bond=rig.stones.elements_per_unit(sim),
             cycle_start_step=int(s.cycle_start_step), cycle_end_step=int(sim.step) + 1)
 

@@ -13,6 +13,7 @@ import xarray as xr
 
 from ..metrics import metrics_dataset
 from ..metrics.output import write_metrics as write_metrics_file
+from ..metrics.breakage import mode_codes
 from .loading import CYCLE_FIELDS
 
 
@@ -22,7 +23,7 @@ def breakage_records(run):
     br = run.rig.stones.breakages(run.rig.sim)
     k0 = run.s.log0
     out = {k: np.asarray(v[k0:]) for k, v in br.items()}
-    out["mode_code"] = np.array([1 if m == "tension" else 2 for m in out["mode"]], np.int8)
+    out["mode_code"] = mode_codes(out["mode"])
     ends = np.asarray(run.cyc["cycle_end_step"], float)
     cyc = np.searchsorted(ends, out["step"], side="left")
     start = (ends[0] - run.cyc["cycle_steps"][0]) if len(ends) else np.inf
@@ -165,7 +166,8 @@ def add_breakage_records(run, data):
     for k, units, ln in BREAKAGE_VARIABLES:
         a = {"units": units, "long_name": f"breakage: {ln}"}
         if k == "mode_code":
-            a.update(flag_values=np.array([1, 2], np.int8), flag_meanings="tension shear")
+            modes = run.rig.stones.break_modes
+            a.update(flag_values=mode_codes(modes), flag_meanings=" ".join(modes))
         data["breakage_" + k] = ("breakage", br[k], a)
 
 

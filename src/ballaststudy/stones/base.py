@@ -15,10 +15,12 @@ class StoneModel(ABC):
     name = ""
     description = ""
     has_flat_joints = False         # what a modifier acting on flat joints needs
+    break_modes = ()                # the modes of its breakage records (metrics.breakage)
 
     @abstractmethod
-    def make(self, sim, stone_balls):
-        """Turn the assembled (bonded) stones of balls ``stone_balls`` into this model's."""
+    def make(self, sim, stone_balls, splitting=None):
+        """Turn the assembled (bonded) stones of balls ``stone_balls`` into this model's
+        (``splitting``: how they split, for a model whose stones split)."""
 
     @abstractmethod
     def topology(self, sim):

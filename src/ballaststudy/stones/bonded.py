@@ -1,14 +1,18 @@
 """Bonded stones (thesis 4.2.1, physics spec "Flat-joint bond"): the BPM as assembled."""
-from .base import StoneModel
+from .base import StoneModel, StoneModelError
 
 
 class BondedStones(StoneModel):
     name = "bonded"
     description = "balls glued by flat joints (the thesis' BPM), breaking element by element"
     has_flat_joints = True
+    break_modes = ("tension", "shear")
 
-    def make(self, sim, stone_balls):
-        """The assembly's stones are already bonded ones."""
+    def make(self, sim, stone_balls, splitting=None):
+        """The assembly's stones are already bonded ones (they break by their joints:
+        ``splitting`` is refused)."""
+        if splitting:
+            raise StoneModelError("bonded stones break by their flat joints, not by splitting")
 
     def topology(self, sim):
         """The flat joints, intact while an element of theirs is (dem.fragments)."""

@@ -13,6 +13,7 @@ from ...metrics.biaxial import compute_biaxial_cycle
 from ...metrics.cycle import MetricsParams
 from ...metrics.strain import axial_strain, specimen_strains
 from ...metrics.void_ratio import SolidCache
+from ...metrics.breakage import mode_codes
 from ..cyclic import CycleState, CyclicRun
 from .inertial import bulk_density, profile_speed, quasi_static_frequency, travel_time
 from .params import KPA
@@ -555,7 +556,7 @@ class BiaxialRun(CyclicRun):
                           y_bottom=float(seg[lay.bottom[0], 1]), y_top=float(seg[lay.top[0], 1])),
             height=rig.height(), width=rig.width(), height0=s.height0, width0=s.width0,
             break_step=br["step"][s.log0:],
-            break_mode=np.where(br["mode"][s.log0:] == "tension", 1, 2),
+            break_mode=mode_codes(br["mode"][s.log0:]).astype(np.int64),
             n_bonds_installed=s.n_bonds0, n_elements_per_bond=rig.stones.elements_per_unit(sim),
             cycle_start_step=s.cycle_start_step, cycle_end_step=sim.step + 1)
 
