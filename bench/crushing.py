@@ -17,7 +17,6 @@ import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from ballaststudy.rig.crushing import CrushingParams, crush, weibull_fit  # noqa: E402
