@@ -234,7 +234,7 @@ def _loop(args):
 
 def register(subparsers):
     c = subparsers.add_parser("loop", help="residuals, candidate effects on held-out tests, the "
-                              "long-term horizon (issue 14)")
+                              "long-term horizon")
     target_arguments(c, "K assembled biaxial specimens (case assemble --rig biaxial)")
     c.add_argument("--parameters", type=Path, help="a calibrated.yaml: the plain model's material "
                    "parameters (default Table 4.2's)")

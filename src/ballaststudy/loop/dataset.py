@@ -30,7 +30,7 @@ def loop_dataset(run, stats):
         "effect": ("effect", list(sel.candidates)), "test": ("test", [r["test"] for r in stats.before]),
         "cycle": ("cycle", run.cycles, {"units": "1", "long_name": "load cycle number N"}),
         "case": ("case", np.arange(run.cases), {"units": "1", "long_name": "specimen"})},
-        attrs={"Conventions": CF, "title": "closing the loop with measured data (issue 14)",
+        attrs={"Conventions": CF, "title": "closing the loop with measured data",
                "tests_json": json.dumps(stats.before), "covariate_tests_json": json.dumps(stats.covariates),
                "candidates_json": json.dumps(stats.candidates), "chosen": sel.chosen or "none",
                "frequency_step_json": json.dumps(stats.step), "frequency_step_units": units,

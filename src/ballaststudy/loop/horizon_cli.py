@@ -116,7 +116,7 @@ def _horizon(args):
 
 def register(subparsers):
     c = subparsers.add_parser("horizon", help="each accumulation law's extrapolation error on measured "
-                              "curves; the law the loop's long-term horizon uses (issue 34)")
+                              "curves; the law the loop's long-term horizon uses")
     c.add_argument("measured", nargs="+", type=Path, help="measured tests' netCDF (measured import)")
     c.add_argument("--out-dir", type=Path, required=True)
     c.add_argument("--fit-cycles", type=number(1, 1e7), nargs="+", default=[1000.0, 10000.0],

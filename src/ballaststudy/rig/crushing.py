@@ -1,5 +1,5 @@
 """Single-stone crushing between two platens: the strength of a library's stones under
-either stone model, and the Weibull law fitted to it (issue 74: the rigid stones' strength
+either stone model, and the Weibull law fitted to it (the rigid stones' strength
 calibrated against the bonded stones', not guessed).
 
 A stone of the library, turned by a seeded random angle, lies between two flat platens
