@@ -6,18 +6,13 @@ import pytest
 import yaml
 
 from ..biaxial_fast import FAST_LOADING
-
-ROOT = Path(__file__).resolve().parents[2]
+from ..shipped import shipped_config
 
 
 def _fast_config(folder):
     """The shipped config with absolute paths and 1000-step consolidation windows."""
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
-    path = Path(folder) / "config.yaml"
-    path.write_text(yaml.safe_dump(cfg))
-    return path
+    return shipped_config(Path(folder) / "config.yaml",
+                          lambda cfg: cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING))
 
 
 def _planted_conditions(path, q_max_kPa, p_kPa=30.0, q_min_kPa=10.0, **extra):

@@ -2,7 +2,6 @@
 compared. Two small box specimens (the rig tests' coarse stones and short stages), a
 "measured" curve made by `case run --conditions --parameters` on one of them."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,8 +11,8 @@ import yaml
 from ballaststudy.cli import main
 from ballaststudy.config import ConfigError
 from ballaststudy.rig.params import RigParams
+from ..shipped import shipped_config
 
-ROOT = Path(__file__).resolve().parents[2]
 ASSEMBLY = dict(drop_max_steps=200000, tamping_steps=8000, relax_steps=2000, fill_area_ratio=0.7)
 LOADING = dict(static_window_steps=1000, static_max_windows=200, servo_velocity_m_s=0.1,
                checkpoint_every=1, snapshot_every=1)
@@ -53,15 +52,13 @@ def box_target(tmp_path_factory, small_library):
     """(folder, config, conditions, measured.nc, [specimens], planted metrics.nc)."""
     from ballaststudy.measured.importer import import_test
     d = tmp_path_factory.mktemp("box_target")
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"]["box"]["assembly"].update(ASSEMBLY)
-    cfg["rig"]["box"]["loading"].update(LOADING)
-    cfg["calibration"].update(quantity="settlement", cases=2, cycles=CYCLES, initial_design=3,
-                              iterations=0, parameters={"mu": {"min": 0.4, "max": 1.2}},
-                              measurement_sd=1e-6)
-    config = d / "config.yaml"
-    config.write_text(yaml.safe_dump(cfg))
+    def change(cfg):
+        cfg["rig"]["box"]["assembly"].update(ASSEMBLY)
+        cfg["rig"]["box"]["loading"].update(LOADING)
+        cfg["calibration"].update(quantity="settlement", cases=2, cycles=CYCLES, initial_design=3,
+                                  iterations=0, parameters={"mu": {"min": 0.4, "max": 1.2}},
+                                  measurement_sd=1e-6)
+    config = shipped_config(d / "config.yaml", change)
     specimens = [d / f"s{k}.nc" for k in range(2)]
     for k, s in enumerate(specimens):
         assert main(["case", "assemble", str(small_library), "--case", str(k), "--rig", "box",

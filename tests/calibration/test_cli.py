@@ -12,18 +12,13 @@ from ballaststudy.cli import main
 from ballaststudy.config import ConfigError
 
 from ..biaxial_fast import FAST_LOADING
+from ..shipped import shipped_config
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def _config(tmp_path, change):
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["measured"]["tests_dir"] = str(ROOT / cfg["measured"]["tests_dir"])
-    change(cfg["calibration"])
-    path = tmp_path / "config.yaml"
-    path.write_text(yaml.safe_dump(cfg))
-    return path
+    return shipped_config(tmp_path / "config.yaml", lambda cfg: change(cfg["calibration"]))
 
 
 def _copy_workflow(tmp_path):

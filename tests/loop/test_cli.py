@@ -19,19 +19,18 @@ from ballaststudy.config import load_config
 from ballaststudy.rig.kinds import params_from_config
 
 from ..biaxial_fast import FAST_LOADING
+from ..shipped import shipped_config
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def _config(folder, **loop):
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
-    cfg["loop"].update(dict(cases=2, cycles=5, design_sets=2, refine_rounds=1, refine_sets=2,
-                            effects=["end_restraint", "fouling"], measurement_sd=1e-4, posterior_samples=256), **loop)
-    path = Path(folder) / "config.yaml"
-    path.write_text(yaml.safe_dump(cfg))
-    return path
+    def change(cfg):
+        cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
+        cfg["loop"].update(dict(cases=2, cycles=5, design_sets=2, refine_rounds=1, refine_sets=2,
+                                effects=["end_restraint", "fouling"], measurement_sd=1e-4,
+                                posterior_samples=256), **loop)
+    return shipped_config(Path(folder) / "config.yaml", change)
 
 
 @pytest.fixture(scope="module")

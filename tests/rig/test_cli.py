@@ -1,28 +1,22 @@
 """`ballaststudy case assemble|run` end to end on the small case, with an interruption."""
 import json
-from pathlib import Path
 
 import pytest
 import xarray as xr
-import yaml
 
 from ballaststudy.cli import main
 from ballaststudy.rig.params import RigParams
 
 from .conftest import SMALL
-
-ROOT = Path(__file__).resolve().parents[2]
+from ..shipped import shipped_config
 
 
 @pytest.fixture
 def small_config(tmp_path):
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    for stage, keys in RigParams(**SMALL).to_config()["box"].items():
-        cfg["rig"]["box"][stage].update({k: keys[k] for k in SMALL if k in keys})
-    path = tmp_path / "config.yaml"
-    path.write_text(yaml.safe_dump(cfg))
-    return path
+    def small(cfg):
+        for stage, keys in RigParams(**SMALL).to_config()["box"].items():
+            cfg["rig"]["box"][stage].update({k: keys[k] for k in SMALL if k in keys})
+    return shipped_config(tmp_path / "config.yaml", small)
 
 
 def test_case_cli_with_resume(small_library, small_config, tmp_path, capsys):

@@ -4,11 +4,8 @@ every contact; the mu_r modifier sets the stone-stone rolling friction only, and
 a specimen assembled without rolling resistance; a rolling_* key that would do nothing and
 a calibration of mu_r on such specimens are refused in one line (file, key, what is
 allowed). That mu_r = 0 is the law without rolling: tests/dem/test_rolling.py."""
-from pathlib import Path
-
 import numpy as np
 import pytest
-import yaml
 
 from ballaststudy.cli import main
 from ballaststudy.dem.law import ContactLaw
@@ -17,8 +14,8 @@ from ballaststudy.rig.biaxial import MEMBRANE, PLATEN, BiaxialLayout, BiaxialPar
 from ballaststudy.rig.deposition import new_simulation
 from ballaststudy.rig.library import load_library
 from ballaststudy.scenario.modifiers import MODIFIERS, ModifierError
+from ..shipped import shipped_config
 
-ROOT = Path(__file__).resolve().parents[2]
 DOMAIN = (-1.0, -1.0, 1.0, 1.0)
 
 
@@ -63,16 +60,10 @@ def test_mu_r_modifier_refuses_a_specimen_without_rolling(small_library):
 
 @pytest.mark.parametrize("rig, key", [("biaxial", "rolling_friction"), ("box", "rolling_damping_ratio")])
 def test_a_rolling_key_without_rolling_is_one_line(tmp_path, capsys, rig, key):
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["measured"]["tests_dir"] = str(ROOT / cfg["measured"]["tests_dir"])
-    cfg["rig"][rig]["assembly"][key] = 0.1
-    path = tmp_path / "config.yaml"
-    path.write_text(yaml.safe_dump(cfg))
+    path = shipped_config(tmp_path / "config.yaml", lambda cfg: cfg["rig"][rig]["assembly"].update({key: 0.1}))
     assert main(["config", "check", "--config", str(path)]) == 2
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and f"{path}: rig.{rig}.assembly.{key}" in line, line
     assert "allowed: rolling_resistance epsd" in line, line
-    cfg["rig"][rig]["assembly"]["rolling_resistance"] = "epsd"
-    path.write_text(yaml.safe_dump(cfg))
+    shipped_config(path, lambda cfg: cfg["rig"][rig]["assembly"].update({key: 0.1, "rolling_resistance": "epsd"}))
     assert main(["config", "check", "--config", str(path)]) == 0

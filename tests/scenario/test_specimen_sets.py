@@ -1,25 +1,15 @@
 """Specimen sets and the keys a stage overrides: a stage names a set of the rig it runs and
 takes at most its cases (one line naming the key otherwise); the rig parameters a measured
 test sets itself are found (so editing them in the config reruns nothing), and only those."""
-from pathlib import Path
-
 import pytest
-import yaml
 
 from ballaststudy.cli import main
 from ballaststudy.scenario.scenario import conditioned_keys
-
-ROOT = Path(__file__).resolve().parents[2]
+from ..shipped import shipped_config
 
 
 def _config(tmp_path, change):
-    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
-    cfg["measured"]["tests_dir"] = str(ROOT / cfg["measured"]["tests_dir"])
-    change(cfg)
-    path = tmp_path / "config.yaml"
-    path.write_text(yaml.safe_dump(cfg))
-    return path
+    return shipped_config(tmp_path / "config.yaml", change)
 
 
 @pytest.mark.parametrize("change, key, allowed", [
