@@ -187,8 +187,10 @@ def enable(sim, clumps, sigma0, m, d0, seed, fines_diameter, every):
     """Make ``clumps`` breakable: Weibull (sigma0 [Pa] at diameter d0 [m], modulus m),
     strengths drawn for generation 0, fines below ``fines_diameter`` [m], checked every
     ``every`` steps."""
-    if not (sigma0 > 0 and m > 0 and d0 > 0 and fines_diameter >= 0 and int(every) >= 1):
-        raise ValueError("crushing: need sigma0 > 0, m > 0, d0 > 0, fines_diameter >= 0, every >= 1")
+    if not (sigma0 > 0 and m > 0 and d0 > 0 and fines_diameter >= 0 and int(every) >= 1
+            and 0 <= int(seed) < 2 ** 53):
+        raise ValueError("crushing: need sigma0 > 0, m > 0, d0 > 0, fines_diameter >= 0, every >= 1 "
+                         "and 0 <= seed < 2^53 (kept exactly in the float parameters)")
     p = sim.prm
     p[P.CRUSH_EVERY], p[P.CRUSH_SIGMA0], p[P.CRUSH_M] = int(every), sigma0, m
     p[P.CRUSH_D0], p[P.CRUSH_SEED], p[P.CRUSH_FINES] = d0, int(seed), fines_diameter
@@ -264,21 +266,20 @@ def split_clump(sim, c, other):
     gen = int(cl.gen[c]) + 1
     kept = np.setdiff1d(np.flatnonzero((b.clump == c) & (b.alive == 1)), other)
     v, w, x = cl.vel[c].copy(), float(cl.omega[c]), cl.pos[c].copy()
-    child = cl.append(pos=(0.0, 0.0), vel=(0.0, 0.0), omega=w, mass=1.0, inertia=1.0,
-                      held=0, damp=cl.damp[c])
-    for cid, peb in ((c, kept), (child, other)):
+    pieces = []
+    for peb in (kept, other):
         m, cx, cy, inertia = pebble_sums(b.mass[peb], b.pos[peb, 0], b.pos[peb, 1], b.inertia[peb])
-        cl.pos[cid] = (cx, cy)
-        cl.vel[cid] = (v[0] - w * (cy - x[1]), v[1] + w * (cx - x[0]))
-        cl.omega[cid] = w
-        cl.theta[cid] = 0.0
-        cl.mass[cid], cl.inertia[cid] = m, inertia
-        cl.imass[cid], cl.iinertia[cid] = m, inertia    # density scaling: the rebuild after
-        cl.gen[cid] = gen
+        # inertial = real: the rebuild after the split applies density scaling, if on
+        pieces.append(dict(pos=(cx, cy), vel=(v[0] - w * (cy - x[1]), v[1] + w * (cx - x[0])),
+                           omega=w, theta=0.0, mass=m, inertia=inertia, imass=m, iinertia=inertia,
+                           gen=gen, strength=draw_strength(sim.prm, peb, b.rad[peb], gen)))
+    for name, value in pieces[0].items():      # the parent's row: the piece with its lowest ball
+        getattr(cl, name)[c] = value
+    child = cl.append(held=0, damp=cl.damp[c], **pieces[1])
+    for cid, peb, piece in ((c, kept, pieces[0]), (child, other, pieces[1])):
         b.clump[peb] = cid
-        b.offset[peb] = b.pos[peb] - (cx, cy)
-        b.minv[peb] = 1.0 / cl.imass[cid]
-        cl.strength[cid] = draw_strength(sim.prm, peb, b.rad[peb], gen)
+        b.offset[peb] = b.pos[peb] - piece["pos"]
+        b.minv[peb] = 1.0 / piece["mass"]
         sim._follow_clumps(peb)
         if equivalent_diameter(np.pi * (b.rad[peb] ** 2).sum()) < sim.prm[P.CRUSH_FINES]:
             _to_fines(sim, cid, peb)

@@ -129,12 +129,14 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
             suspect |= place_pebbles(prm, kin, balls, clumps, pebbles)
         st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
+        # a controller's event at the same step wins the status; Simulation._run_kernel
+        # then makes the split too
         if st == P.OK and crush_every > 0 and cnt[0] % crush_every == 0 \
                 and overloaded(prm, kin, balls, clumps, pr, wp, walls.seg):
-            st = P.STONES_OVERLOADED      # (a controller's event at this step wins: see
+            st = P.STONES_OVERLOADED
         if st in (P.OK, P.STONES_OVERLOADED) and controlled \
                 and control_step(prm, cnt[0], clumps, walls, ctl):
-            st = P.CONTROL_EVENT          # Simulation._run_kernel, which splits then too)
+            st = P.CONTROL_EVENT
         if st != P.OK:
             _write_back(kin, fa, balls)
             return st, k + 1, pr, wp

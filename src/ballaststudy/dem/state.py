@@ -37,6 +37,16 @@ class _Arrays:
         for f in fields(self):
             setattr(self, f.name, getattr(arrays, f.name))
 
+    def append_rows(self, k, cols):
+        """Grow every column by ``k`` rows (zeros) and set ``cols`` {name: value} in them.
+        Returns the first new row."""
+        n0 = len(self)
+        for f in fields(self):
+            setattr(self, f.name, _grow(getattr(self, f.name), n0 + k))
+        for name, v in cols.items():
+            getattr(self, name)[n0:] = v
+        return n0
+
 
 def _z(*shape, dtype=np.float64):
     return field(default_factory=lambda: np.zeros(shape, dtype=dtype))
@@ -71,12 +81,8 @@ class Balls(_Arrays):
         return self.pos.shape[0]
 
     def append(self, **cols):
-        n0, k = len(self), len(cols["pos"])
-        for f in fields(self):
-            a = getattr(self, f.name)
-            setattr(self, f.name, _grow(a, n0 + k))
-        for name, v in cols.items():
-            getattr(self, name)[n0:] = v
+        k = len(cols["pos"])
+        n0 = self.append_rows(k, cols)
         return np.arange(n0, n0 + k)
 
 
@@ -98,11 +104,8 @@ class Walls(_Arrays):
         return self.seg.shape[0]
 
     def append(self, **cols):
-        n0, k = len(self), len(cols["seg"])
-        for f in fields(self):
-            setattr(self, f.name, _grow(getattr(self, f.name), n0 + k))
-        for name, v in cols.items():
-            getattr(self, name)[n0:] = v
+        k = len(cols["seg"])
+        n0 = self.append_rows(k, cols)
         return np.arange(n0, n0 + k)
 
 
@@ -146,12 +149,7 @@ class Clumps(_Arrays):
         cols.setdefault("imass", cols["mass"])
         cols.setdefault("iinertia", cols["inertia"])
         cols.setdefault("strength", np.inf)
-        n0 = len(self)
-        for f in fields(self):
-            setattr(self, f.name, _grow(getattr(self, f.name), n0 + 1))
-        for name, v in cols.items():
-            getattr(self, name)[n0] = v
-        return n0
+        return self.append_rows(1, cols)
 
 
 @dataclass
@@ -288,11 +286,7 @@ class SplitLog(_Arrays):
         return self.step.shape[0]
 
     def append(self, **cols):
-        n0 = len(self)
-        for f in fields(self):
-            setattr(self, f.name, _grow(getattr(self, f.name), n0 + 1))
-        for name, v in cols.items():
-            getattr(self, name)[n0] = v
+        self.append_rows(1, cols)
 
     @classmethod
     def from_dict(cls, d, prefix):

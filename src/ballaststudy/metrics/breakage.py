@@ -21,7 +21,7 @@ BREAK_MODE_CODES = {"tension": MODE_TENSION, "shear": MODE_SHEAR, "split": MODE_
 
 def mode_codes(modes):
     """The codes of breakage modes given by name ('tension', 'shear', 'split')."""
-    return np.array([BREAK_MODE_CODES[str(m)] for m in modes], np.int8)
+    return _modes(np.asarray(modes, dtype=object)).astype(np.int8)
 
 
 def _modes(mode):

@@ -25,7 +25,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..dem import ContactLaw, Simulation
-from ..dem.materials import STONE_MATERIALS
+from ..dem.materials import F_STR_CO, STONE_MATERIALS
 from ..stones import stone_model
 
 
@@ -38,7 +38,7 @@ class CrushingParams:
     max_strain: float = 0.3           # censored: closed by this share of the stone's height
     chunk_steps: int = 50             # bonded: failure looked for after each chunk (rigid:
                                       # after each stress check: the peak is the split's force)
-    F_str_co: float = 3.5             # bonded: flat-joint strength factor (Table 4.2: 3.5)
+    F_str_co: float = F_STR_CO        # flat joints: their strength factor (Table 4.2: 3.5)
     check_every_steps: int = 10       # rigid: stresses checked every this many steps
 
 
@@ -75,22 +75,22 @@ def _platen_sim(lib, k, angle, params):
 
 
 def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
-    """Crush stone ``k`` of ``lib`` under stone model ``model`` ("bonded" | "rigid";
-    ``splitting``: the rigid stones' Weibull, dict(sigma0, m, d0)). Returns a Crush."""
+    """Crush stone ``k`` of ``lib`` under the stone model named ``model`` (``splitting``:
+    the Weibull of stones that split, dict(sigma0, m, d0)). Returns a Crush."""
     rng = np.random.default_rng([int(seed), int(k)])
     angle = rng.uniform(0.0, 2.0 * np.pi)
-    stream_seed = int(rng.integers(2 ** 62))    # each stone its own strength stream
+    stream_seed = int(rng.integers(2 ** 53))    # each stone its own strength stream
     sim, ids, top, height, span = _platen_sim(lib, k, angle, params)
     stones = stone_model(model)
-    if model == "bonded":
-        sim.scale_bond_strength(params.F_str_co / 3.5)
-    else:
-        stones.make(sim, ids, dict(seed=stream_seed, fines_diameter=0.0,
-                                   every=params.check_every_steps, **splitting))
+    if stones.has_flat_joints:
+        sim.scale_bond_strength(params.F_str_co / F_STR_CO)
+    split = None if splitting is None else dict(seed=stream_seed, fines_diameter=0.0,
+                                                every=params.check_every_steps, **splitting)
+    stones.make(sim, ids, split)
     d = 2.0 * float(np.sqrt((sim.balls.rad[ids] ** 2).sum()))
     mass = sim.balls.mass[ids]
     peak, closed, failed = 0.0, 0.0, False
-    chunk = params.chunk_steps if model == "bonded" else params.check_every_steps
+    chunk = params.check_every_steps if split else params.chunk_steps
     while closed < params.max_strain * height:
         sim.run(chunk)
         b = sim.balls
@@ -103,8 +103,11 @@ def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
         if largest < params.intact_share * mass.sum():
             failed = True
             break
-    drawn = float(sim.clumps.strength[0]) if model != "bonded" and not len(sim.splits) else (
-        float(sim.splits.strength[0]) if len(sim.splits) else float("nan"))
+    drawn = float("nan")                  # a stone that splits: the strength it drew
+    if len(sim.splits):
+        drawn = float(sim.splits.strength[0])
+    elif split:
+        drawn = float(sim.clumps.strength[0])
     return Crush(int(k), d, peak, peak / (d * lib.thickness), failed, sim.step, drawn)
 
 

@@ -33,6 +33,7 @@ from ..inputs import open_netcdf
 from ..rig.batched import run_batched
 from ..rig.kinds import kind_of, rig_classes
 from ..schema import ConfigError
+from ..stones import stone_model
 from .modifiers import MODIFIERS
 
 BACKENDS = ("cpu", "cuda")
@@ -208,7 +209,7 @@ def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared
     first_cycle_key, and the first loading shared in the cache folder ``shared``, see
     above), or every unfinished case in GPU batches, one per contact law (cuda)."""
     check_backend(backend)
-    if backend == "cuda" and any(c[0].stone_model != "bonded" for c in cases):
+    if backend == "cuda" and not all(stone_model(c[0].stone_model).gpu_batch for c in cases):
         raise ConfigError("config", "stone_model", "the GPU batch (backend cuda) runs bonded "
                           "stones only (no per-clump timestep or clump density scaling on the "
                           "device yet); allowed: stone_model bonded, or backend cpu")

@@ -161,7 +161,7 @@ def check_stone_model(cfg, file, backend=None, model=None, parameters=None,
         if m in MODIFIERS and MODIFIERS[m].needs_flat_joints and not model.has_flat_joints:
             raise ConfigError(where, key, f"{m} acts on flat joints, which stone_model "
                               f"{model.name} has not; allowed: stone_model bonded, or leave {m} out")
-    if model.name != DEFAULT and (backend or cfg.get("backend", "cpu")) == "cuda":
+    if not model.gpu_batch and (backend or cfg.get("backend", "cpu")) == "cuda":
         raise ConfigError(file, "backend", f"cuda: the GPU batch runs bonded stones only; allowed: "
                           f"backend cpu with stone_model {model.name}")
     return model.name

@@ -7,6 +7,7 @@ class BondedStones(StoneModel):
     description = "balls glued by flat joints (the thesis' BPM), breaking element by element"
     has_flat_joints = True
     break_modes = ("tension", "shear")
+    gpu_batch = True
 
     def make(self, sim, stone_balls, splitting=None):
         """The assembly's stones are already bonded ones (they break by their joints:
