@@ -19,7 +19,8 @@ from ballaststudy.calibration.evaluate import Evaluator
 from ballaststudy.rig.biaxial import BiaxialParams, assemble_biaxial
 from ballaststudy.rig.library import load_library
 
-from .conftest import ROOT, _fast_config, _planted_conditions
+from ..shipped import ROOT
+from .conftest import _fast_config, _planted_conditions
 
 TRUE = {"F_str_co": 2.0, "mu": 0.9}
 LOWER, UPPER = np.array([1.0, 0.4]), np.array([6.0, 1.2])
