@@ -194,3 +194,43 @@ def test_a_run_that_splits_is_the_same_however_chunked_and_resumed(tmp_path):
         assert np.array_equal(other.clumps.vel, whole.clumps.vel)
         for k, v in whole.split_log().items():
             assert np.array_equal(other.split_log()[k], v), k
+
+
+def test_fatigue_damage_is_miners_sum_over_the_cycles_peaks():
+    """accumulate_damage: a cycle whose peak stress is r x strength adds r^b above the
+    endurance ratio, nothing below it; the sum is capped at 1; the peaks start again."""
+    sim, c = _stone()
+    _enable(sim, [c])
+    s = sim.clumps.strength[c]
+    b, endurance, total = 3.0, 0.4, 0.0
+    for r in (0.5, 0.3, 0.8, 0.4, 0.6):
+        sim.clumps.peak[c] = r * s
+        gain = sim.accumulate_damage(b, endurance)
+        total += r ** b if r > endurance else 0.0
+        assert gain[c] == pytest.approx(r ** b if r > endurance else 0.0, rel=1e-12)
+        assert sim.clumps.damage[c] == pytest.approx(total, rel=1e-12) and sim.clumps.peak[c] == 0.0
+    sim.clumps.peak[c] = 0.99 * s
+    sim.accumulate_damage(1.0, 0.0)
+    assert sim.clumps.damage[c] == 1.0
+
+
+def test_a_damaged_disk_splits_at_its_lowered_strength_and_the_peak_is_the_checks_largest():
+    """With damage D the disk between platens splits once its characteristic stress reaches
+    strength (1 - D), not before; until then the kernel's peak is exactly the largest
+    stress at its checks."""
+    sim, c = _between_platens()
+    sim.clumps.damage[c] = 0.6
+    limit = sim.clumps.strength[c] * 0.4
+    checked = 0.0
+    while not len(sim.splits) and sim.step < 40000:
+        sim.run(10)
+        if not len(sim.splits):
+            fmax, _, area = crushing.loads(sim)
+            sig = crushing.characteristic_stress(1.0, fmax, area)[c]
+            checked = max(checked, sig)
+            assert sim.clumps.peak[c] == checked and sig < limit
+    log = sim.split_log()
+    assert len(log["step"]) == 1 and log["stress"][0] >= limit
+    assert log["stress"][0] - limit < limit - checked + 0.05 * limit        # no overshoot
+    assert log["stress"][0] < 0.5 * log["strength"][0]           # well below the undamaged strength
+    assert sim.clumps.damage.tolist() == [0.0, 0.0]                 # the pieces start undamaged

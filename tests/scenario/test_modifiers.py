@@ -266,17 +266,20 @@ def test_abrasion_starts_from_the_plain_runs_first_loading(setup, monkeypatch, t
 @pytest.mark.parametrize("name", sorted(EFFECTS))
 def test_check_rejects_bad_values_naming_the_modifier(name):
     effect = MODIFIERS[name]
-    (p,) = effect.parameters
-    effect.check({p.name: p.low})
-    effect.check({p.name: p.high})
-    mid = 0.5 * (p.low + p.high)
-    for bad in ({p.name: p.low - 0.01}, {p.name: p.high + 0.01}, {p.name: -p.high}, {},
-                {p.name: mid, "extra": mid}, {"other": mid}):
+    mid = {q.name: 0.5 * (q.low + q.high) for q in effect.parameters}
+    effect.check({q.name: q.low for q in effect.parameters})
+    effect.check({q.name: q.high for q in effect.parameters})
+    bads = [{}, {**mid, "extra": 0.5}, {"other": 0.5}]
+    for p in effect.parameters:
+        bads += [{**mid, p.name: p.low - 0.01}, {**mid, p.name: p.high + 0.01}, {**mid, p.name: -p.high}]
+        if len(effect.parameters) > 1:
+            bads.append({k: v for k, v in mid.items() if k != p.name})
+    for bad in bads:
         with pytest.raises(ValueError, match=f"modifier {name}"):
             effect.check(bad)
         with pytest.raises(ValueError, match=f"modifier {name}"):
             effect.apply(None, bad)                 # checked before the rig is touched
-    assert len(effect.hooks({p.name: mid})) == (name == "abrasion")
+    assert len(effect.hooks(mid)) == (name in ("abrasion", "fatigue"))
 
 
 @pytest.mark.parametrize("cov", [{"value": 150.0, "units": "%"}, {"value": 0.5, "units": "1"}])

@@ -31,7 +31,7 @@ rule calibrate:
         calibration=trigger("calibration"),
         rig=trigger(f"rig.{CAL_KIND}.loading", drop=conditioned_keys(CAL_KIND, CAL_TARGETS)),
         metrics=trigger("metrics"),
-        stones=trigger("stone_model"),   # the stone model: rerun the loading
+        stones=stones_trigger(),   # the stone model, its splitting: rerun the loading
         out_dir=CAL_OUT,
         config=CONFIG_FILE,
         backend=config["backend"],

@@ -38,7 +38,7 @@ rule case_run:
     params:
         loading=trigger("rig.box.loading"),   # editing the loading or metrics section: rerun the loading
         metrics=trigger("metrics"),
-        stones=trigger("stone_model"),   # the stone model: rerun the loading
+        stones=stones_trigger(),   # the stone model, its splitting: rerun the loading
         cycles=RigParams.from_config(config.get("rig")).cycles,
         parameters=f"--parameters {CAL_OUT}/calibrated.yaml" if CALIBRATED else "",
         config=CONFIG_FILE,

@@ -23,6 +23,14 @@ def trigger(*dotted, drop=()):
     return json.dumps(parts[dotted[0]] if len(dotted) == 1 else parts, sort_keys=True)
 
 
+def stones_trigger():
+    """The stone model's rerun trigger: its name, and how its stones split when they do
+    (a run whose stones do not split keeps the trigger it had before splitting existed)."""
+    if not (config.get("rigid_stones") or {}).get("splitting"):
+        return trigger("stone_model")
+    return trigger("stone_model", "rigid_stones")
+
+
 def conditioned_keys(kind, tests):
     """The rig parameters every measured test of ``tests`` (names under measured.tests_dir)
     sets itself: edited in the config, they change nothing the stage runs. Tests that are

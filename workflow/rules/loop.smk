@@ -51,7 +51,7 @@ rule loop:
         loop=trigger("loop"),
         rig=trigger("rig.biaxial.loading", drop=conditioned_keys("biaxial", LOOP["targets"])),
         metrics=trigger("metrics"),
-        stones=trigger("stone_model"),   # the stone model: rerun the loading
+        stones=stones_trigger(),   # the stone model, its splitting: rerun the loading
         parameters=f"--parameters {CAL_OUT}/calibrated.yaml" if LOOP_CALIBRATED else "",
         config=CONFIG_FILE,
         backend=config["backend"],

@@ -63,7 +63,7 @@ rule measured_sim_run:
     params:
         loading=lambda wc: trigger("rig.biaxial.loading", drop=conditioned_keys("biaxial", [wc.test])),
         metrics=trigger("metrics"),
-        stones=trigger("stone_model"),   # the stone model: rerun the loading
+        stones=stones_trigger(),   # the stone model, its splitting: rerun the loading
         cycles=MEASURED_SIM["cycles"],
         mode=MEASURED_SIM["mode"],
         mapping=mapping_option("measured.sim"),

@@ -40,7 +40,7 @@ rule parametric_run:
     params:
         loading=trigger("rig.box.loading"),
         metrics=trigger("metrics"),
-        stones=trigger("stone_model"),   # the stone model: rerun the loading
+        stones=stones_trigger(),   # the stone model, its splitting: rerun the loading
         cycles=PARAM_CYCLES,
         config=CONFIG_FILE,
     log:

@@ -31,7 +31,8 @@ from ..rig.kinds import RUNS_TESTS, kind_for_test, kind_of, rig_classes
 from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import MATERIAL, MODIFIERS, material_parameter
 from ..scenario.runner import BACKENDS, check_backend
-from ..scenario.scenario import check_stone_model
+from ..scenario.scenario import check_stone_model, splitting_of
+from ..stones import DEFAULT
 from .bayes import calibrate, rmse
 from .evaluate import Evaluator
 from .parametric import (DESIGN, cases_per_value, findings, parametric_dataset, plot_parameter,
@@ -200,7 +201,7 @@ def _calibrate(args):
     recorder = Recorder("calibrate", inputs=(*args.measured, *args.conditions, args.config, *args.specimens,
                                              *([args.strength_envelope] if args.strength_envelope else [])),
                         params={"calibration": cal, "stress_mapping": cfg.get("stress_mapping"),
-                                "stone_model": cfg.get("stone_model", "bonded")},
+                                "stone_model": cfg.get("stone_model", DEFAULT), "splitting": splitting_of(cfg)},
                         seed=cfg["seed"])
     mapping = stage_mapping(cfg, args.config, args.strength_envelope, kind)
     evaluate = Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],

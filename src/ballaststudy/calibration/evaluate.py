@@ -16,7 +16,7 @@ from ..rig.kinds import kind_of
 from ..scenario.modifiers import material_modifiers
 from ..scenario.results import at_points, case_curve
 from ..scenario.runner import cached_case, run_cases, without_hook_only
-from ..scenario.scenario import conditioned_rig, scenario
+from ..scenario.scenario import conditioned_rig, scenario, splitting_of
 from ..stones import DEFAULT
 
 
@@ -50,6 +50,7 @@ class Evaluator:
         cfg = config if isinstance(config, dict) else load_config(config)
         self.metrics = cfg.get("metrics")
         self.stone_model = cfg.get("stone_model", DEFAULT)
+        self.splitting = splitting_of(cfg)
         self.tests = []
         for conditions, points in tests:
             loaded = load_conditions(conditions)
@@ -71,7 +72,7 @@ class Evaluator:
             modifiers = material_modifiers({**self.base, **values})
         return [scenario(self.kind, self.specimens, t["rig"], self.cycles, modifiers, t["loaded"],
                          t["conditions"], self.metrics, self.perturbation_m_s, self.perturbation_seed,
-                         t["mapping"], self.stone_model)
+                         t["mapping"], self.stone_model, self.splitting)
                 for t in self.tests]
 
     def mapping_records(self):

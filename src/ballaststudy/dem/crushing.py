@@ -136,14 +136,17 @@ def characteristic_stress(thick, fmax, area):
 
 @njit(cache=True, error_model="numpy")
 def overloaded(prm, kin, balls, clumps, pr, wp, seg):
-    """True if a free clump's characteristic stress reached its strength (engine.run_steps
-    asks at steps that are multiples of CRUSH_EVERY)."""
+    """True if a free clump's characteristic stress reached its strength, lowered by its
+    damage (engine.run_steps asks at steps that are multiples of CRUSH_EVERY); each
+    clump's ``peak`` keeps the largest stress so checked (what damage accumulates from)."""
     fmax, _, area = stone_loads(prm[P.THICK], kin, balls.clump, balls.alive, pr, wp, seg, clumps.pos)
     sig = characteristic_stress(prm[P.THICK], fmax, area)
+    hit = False
     for c in range(sig.shape[0]):
-        if not clumps.held[c] and sig[c] >= clumps.strength[c]:
-            return True
-    return False
+        if not clumps.held[c]:
+            clumps.peak[c] = max(clumps.peak[c], sig[c])
+            hit |= sig[c] >= clumps.strength[c] * (1.0 - clumps.damage[c])
+    return hit
 
 
 # ---------------------------------------------------------------- strength (Python)
@@ -200,6 +203,34 @@ def enable(sim, clumps, sigma0, m, d0, seed, fines_diameter, every):
         sim.clumps.strength[c] = draw_strength(p, peb, b.rad[peb], sim.clumps.gen[c])
 
 
+def settings(sim):
+    """The splitting law a Simulation runs ({sigma0_Pa, weibull_modulus, d0_m, seed,
+    fines_diameter_m, every_steps}; None when its stones do not split)."""
+    p = sim.prm
+    if not p[P.CRUSH_EVERY]:
+        return None
+    return dict(sigma0_Pa=float(p[P.CRUSH_SIGMA0]), weibull_modulus=float(p[P.CRUSH_M]),
+                d0_m=float(p[P.CRUSH_D0]), seed=int(p[P.CRUSH_SEED]),
+                fines_diameter_m=float(p[P.CRUSH_FINES]), every_steps=int(p[P.CRUSH_EVERY]))
+
+
+# ---------------------------------------------------------------- damage (Python)
+def accumulate_damage(sim, exponent, endurance):
+    """One loading cycle's fatigue damage (Miner's linear sum over a Basquin S-N curve):
+    a stone whose largest characteristic stress in the cycle (``Clumps.peak``, kept by the
+    kernel's checks) reached the ratio r = peak / strength above ``endurance`` gains
+    1 / N_f(r) = r^exponent (N_f(1) = 1: a load at the strength breaks it at once, as the
+    static criterion does); it splits once its load reaches strength (1 - D). The peaks
+    start again from 0. Returns the damage gained per clump."""
+    cl = sim.clumps
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = np.where(np.isfinite(cl.strength) & (cl.held == 0), cl.peak / cl.strength, 0.0)
+    gain = np.where(r > endurance, r ** exponent, 0.0)
+    cl.damage[:] = np.minimum(cl.damage + gain, 1.0)
+    cl.peak[:] = 0.0
+    return gain
+
+
 # ---------------------------------------------------------------- the split (Python)
 def loads(sim):
     """stone_loads at the current state: (F_max, S, A) per clump."""
@@ -238,7 +269,7 @@ def split_overloaded(sim):
     fmax, s, area = loads(sim)
     sig = characteristic_stress(sim.prm[P.THICK], fmax, area)
     cl = sim.clumps
-    hit = np.flatnonzero((cl.held == 0) & (sig >= cl.strength))
+    hit = np.flatnonzero((cl.held == 0) & (sig >= cl.strength * (1.0 - cl.damage)))
     pairs = []
     for c in hit:
         u = split_line(s[c])
@@ -261,7 +292,8 @@ def split_clump(sim, c, other):
     """Clump ``c`` loses the pebbles ``other`` to a new clump: both pieces take c's rigid
     motion at their own centre of mass (v_f = v + w x (x_f - x_c), w_f = w), which keeps
     mass, momentum and angular momentum and splits the kinetic energy exactly (parallel
-    axes). Both draw a strength for the next generation. Returns the new clump's id."""
+    axes). Both draw a strength for the next generation and start undamaged (the crack
+    that damaged the parent is the split). Returns the new clump's id."""
     b, cl = sim.balls, sim.clumps
     gen = int(cl.gen[c]) + 1
     kept = np.setdiff1d(np.flatnonzero((b.clump == c) & (b.alive == 1)), other)
@@ -272,7 +304,8 @@ def split_clump(sim, c, other):
         # inertial = real: the rebuild after the split applies density scaling, if on
         pieces.append(dict(pos=(cx, cy), vel=(v[0] - w * (cy - x[1]), v[1] + w * (cx - x[0])),
                            omega=w, theta=0.0, mass=m, inertia=inertia, imass=m, iinertia=inertia,
-                           gen=gen, strength=draw_strength(sim.prm, peb, b.rad[peb], gen)))
+                           gen=gen, strength=draw_strength(sim.prm, peb, b.rad[peb], gen),
+                           damage=0.0, peak=0.0))
     for name, value in pieces[0].items():      # the parent's row: the piece with its lowest ball
         getattr(cl, name)[c] = value
     child = cl.append(held=0, damp=cl.damp[c], **pieces[1])

@@ -402,6 +402,14 @@ class Simulation:
         fines. The record: ``split_log``."""
         crushing.enable(self, clumps, sigma0, m, d0, seed, fines_diameter, every)
 
+    def crushing_settings(self):
+        """The splitting law enabled (crushing.settings), None if stones do not split."""
+        return crushing.settings(self)
+
+    def accumulate_damage(self, exponent, endurance):
+        """One cycle's fatigue damage of the splitting stones (crushing.accumulate_damage)."""
+        return crushing.accumulate_damage(self, exponent, endurance)
+
     def scale_bond_strength(self, factor, bonds=None):
         """Multiply tensile strength and cohesion of ``bonds`` (default all) by factor."""
         idx = slice(None) if bonds is None else bonds

@@ -129,20 +129,25 @@ class Clumps(_Arrays):
     iinertia: np.ndarray = _z(0)      # inertial moment of inertia [kg m^2]
     strength: np.ndarray = _z(0)      # characteristic stress at which it splits [Pa] (inf: never)
     gen: np.ndarray = _z(0, dtype=np.int32)   # splits between the assembled stone and this piece
+    damage: np.ndarray = _z(0)        # fatigue damage D: it splits at strength (1 - D) [-]
+    peak: np.ndarray = _z(0)          # largest characteristic stress checked since the last
+                                      # damage update [Pa]
 
     def __len__(self):
         return self.pos.shape[0]
 
     @classmethod
     def from_dict(cls, d, prefix):
-        """Checkpoints written before the inertial and strength columns existed: real =
-        inertial, unbreakable, generation 0."""
+        """Checkpoints written before the inertial, strength and damage columns existed:
+        real = inertial, unbreakable, generation 0, undamaged."""
         d = dict(d)
         for name, real in (("imass", "mass"), ("iinertia", "inertia")):
             d.setdefault(prefix + name, d[prefix + real])
         n = len(d[prefix + "mass"])
         d.setdefault(prefix + "strength", np.full(n, np.inf))
         d.setdefault(prefix + "gen", np.zeros(n, np.int32))
+        d.setdefault(prefix + "damage", np.zeros(n))
+        d.setdefault(prefix + "peak", np.zeros(n))
         return super().from_dict(d, prefix)
 
     def append(self, **cols):

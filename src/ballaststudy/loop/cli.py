@@ -35,7 +35,8 @@ from ..provenance import Recorder
 from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import EFFECTS, MODIFIERS, load_material_values
 from ..scenario.runner import check_backend
-from ..scenario.scenario import check_stone_model
+from ..scenario.scenario import check_stone_model, splitting_of
+from ..stones import DEFAULT
 from .horizon import chosen_for
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
@@ -189,7 +190,7 @@ def _loop(args):
                                         *([args.horizon] if args.horizon else []),
                                         *([args.strength_envelope] if args.strength_envelope else [])),
                         params={"loop": lp, "base": base, "stress_mapping": cfg.get("stress_mapping"),
-                                "stone_model": cfg.get("stone_model", "bonded")},
+                                "stone_model": cfg.get("stone_model", DEFAULT), "splitting": splitting_of(cfg)},
                         seed=cfg["seed"])
     mapping = stage_mapping(cfg, args.config, args.strength_envelope, "biaxial")
     t0 = time.time()

@@ -30,11 +30,11 @@ from ..rig.kinds import kind_of, params_from_config
 from ..rig.library import load_library
 from ..rig.params import case_seed
 from ..rig.vtk import vtk_hook
-from .modifiers import ModifierError, load_material_values, material_modifiers
+from .modifiers import EFFECTS, MODIFIERS, ModifierError, load_material_values, material_modifiers
 from .mapping import stage_mapping
 from .runner import checkpoint_of, prepared_run, write_case
 from ..stones import STONE_MODELS
-from .scenario import check_stone_model, conditioned_rig, scenario
+from .scenario import check_stone_model, conditioned_rig, scenario, splitting_of
 
 
 def _kind(args, cfg):
@@ -93,8 +93,31 @@ def case_scenario(args):
     rig, record = conditioned_rig(kind, cfg.get("rig", {}), conditions, args.mode, args.conditions, mapping)
     material = load_material_values(args.parameters) if args.parameters else {}
     model = check_stone_model(cfg, args.config, "cpu", args.stone_model, (args.parameters, material), stages=())
-    return scenario(kind, [args.assembled], rig, args.cycles, material_modifiers(material), conditions,
-                    args.conditions or "", cfg.get("metrics"), mapping=record, stone_model=model), material
+    effects = [_effect(text, model, splitting_of(cfg)) for text in args.effect or ()]
+    return scenario(kind, [args.assembled], rig, args.cycles, material_modifiers(material) + effects,
+                    conditions, args.conditions or "", cfg.get("metrics"), mapping=record, stone_model=model,
+                    splitting=splitting_of(cfg)), material
+
+
+def _effect(text, model, splitting):
+    """(name, {parameter: value}) of an --effect NAME:PARAMETER=VALUE,... that the stone
+    model can take; ConfigError naming the option otherwise."""
+    name, _, rest = text.partition(":")
+    def bad(why):
+        return ConfigError("command line", "--effect", f"{text}: {why}")
+    if name not in EFFECTS:
+        raise bad(f"not an effect; allowed: {', '.join(EFFECTS)}")
+    try:
+        values = {k.strip(): float(v) for k, v in (item.split("=") for item in rest.split(",") if item)}
+        MODIFIERS[name].check(values)
+    except ValueError as err:
+        raise bad(f"{err}; expected {name}:" + ",".join(f"{p.name}=VALUE" for p in MODIFIERS[name].parameters)) from None
+    m = MODIFIERS[name]
+    if m.needs_flat_joints and not STONE_MODELS[model].has_flat_joints:
+        raise bad(f"acts on flat joints, which stone_model {model} has not")
+    if m.needs_splitting and splitting is None:
+        raise bad("acts on splitting stones; allowed with stone_model rigid and rigid_stones.splitting true")
+    return name, values
 
 
 def _progress(bar, first):
@@ -119,7 +142,8 @@ def _case_run(args):
                                                           args.strength_envelope) if p]),
                         params={"cycles": args.cycles, "rig": sc.rig.to_dict(), "metrics": sc.metrics,
                                 "material_parameters": material, "stress_mapping": sc.mapping,
-                                "stone_model": sc.stone_model,
+                                "stone_model": sc.stone_model, "splitting": sc.splitting,
+                                "effects": [[n, v] for n, v in sc.modifier_values() if n in EFFECTS],
                                 "scenario_key": sc.key})
     try:
         run, resumed = prepared_run(sc, 0, out, args.checkpoint_every, args.restart)
@@ -245,6 +269,9 @@ def register(subparsers):
                    "(case envelope), for the config's stress_mapping strength_ratio")
     r.add_argument("--stone-model", choices=tuple(STONE_MODELS), help="how the stones are "
                    "modelled in this run (default: the config's stone_model; ballaststudy.stones)")
+    r.add_argument("--effect", action="append", metavar="NAME:PARAMETER=VALUE,...", help="add an "
+                   "effect (scenario.modifiers) with its parameters, e.g. fatigue:fatigue_exponent=10,"
+                   "endurance_ratio=0.3 (repeatable; give the same again to resume a run)")
     r.add_argument("--config", default="config/config.yaml", type=Path)
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=_case_run)

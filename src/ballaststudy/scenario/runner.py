@@ -85,7 +85,9 @@ def fresh_run(scenario, k, checkpoint, checkpoint_every=None):
     rig_class, run_class, _ = rig_classes(scenario.kind)
     rig = rig_class.from_dataset(assembled, "engine_checkpoint")
     rig.params = scenario.rig
-    rig.use_stone_model(scenario.stone_model)
+    # each specimen's strengths from its own seed: one specimen, the same stones under
+    # every parameter set (common random numbers across a calibration's sets)
+    rig.use_stone_model(scenario.stone_model, scenario.splitting_for(rig.layout.seed))
     for name, values in scenario.modifier_values():
         MODIFIERS[name].apply(rig, values, scenario.covariates)
     if scenario.perturbation_m_s:       # the chaos probe (loop.select)

@@ -9,7 +9,8 @@ specimens' content (sha-256 of their files, not their names: specimens re-assemb
 the same names must not reuse old cases), the rig's parameters as the run sees them (the
 modifiers' rig settings applied) but those inert under the others (``inert_keys``: a
 quasi-static test's frequency), the modifiers in the order they are applied with their
-values (12 significant digits), the stone model when it is not the thesis' bonded one, the covariates its modifiers read, the cycles, the metrics
+values (12 significant digits), the stone model when it is not the thesis' bonded one and
+its splitting law when its stones split, the covariates its modifiers read, the cycles, the metrics
 settings, a chaos probe's perturbation when there is one, and the stress mapping's kind and
 ratio when one is applied (mapping.py; the bounds it set are in the rig's parameters
 already). File names and the conditions file are labels, not part of the key: scenarios of
@@ -63,6 +64,7 @@ class Scenario:
     perturbation_seed: int = 0      # its seed (+ the specimen's index)
     mapping_json: str = '{"stress_mapping":"none"}'   # the stress mapping's record at the test
     stone_model: str = DEFAULT      # how the stones are modelled (ballaststudy.stones)
+    splitting_json: str = "null"    # how rigid stones split (splitting_of; null: they do not)
 
     @property
     def rig(self):
@@ -76,6 +78,15 @@ class Scenario:
     @property
     def metrics(self):
         return json.loads(self.metrics_json)
+
+    @property
+    def splitting(self):
+        """Simulation.enable_crushing's arguments but the seed (None: stones do not split)."""
+        return json.loads(self.splitting_json)
+
+    def splitting_for(self, seed):
+        """The splitting of a specimen whose strengths are drawn from ``seed`` (None: off)."""
+        return None if self.splitting is None else {**self.splitting, "seed": int(seed) % 2 ** 53}
 
     @property
     def mapping(self):
@@ -123,6 +134,7 @@ class Scenario:
         probe.update({"stress_mapping": mapped} if mapped else {})
         # the thesis' bonded stones keep the keys they had before the switch existed
         probe.update({"stone_model": self.stone_model} if self.stone_model != DEFAULT else {})
+        probe.update({"splitting": self.splitting} if self.splitting is not None else {})
         text = _canonical({"kind": self.kind, "specimens": list(self.specimen_hashes),
                            "rig": rig, "cycles": self.cycles,
                            "modifiers": [[n, _rounded(dict(v))] for n, v in self.modifiers],
@@ -145,14 +157,31 @@ def _named_modifiers(cfg, key):
     return list(node)
 
 
+def splitting_of(cfg):
+    """Simulation.enable_crushing's arguments but the seed from the config's
+    ``rigid_stones`` section (None unless its splitting is on)."""
+    rs = cfg.get("rigid_stones") or {}
+    if not rs.get("splitting"):
+        return None
+    return dict(sigma0=float(rs["strength_sigma0_Pa"]), m=float(rs["weibull_modulus"]),
+                d0=float(rs["reference_diameter_m"]), fines_diameter=float(rs["fines_diameter_m"]),
+                every=int(rs["check_every_steps"]))
+
+
 def check_stone_model(cfg, file, backend=None, model=None, parameters=None,
                       stages=STONE_MODEL_STAGES):
     """What the stone model (``model``, default the config's) cannot run, refused in one
-    line (ConfigError) before anything runs: a modifier the ``stages`` name (calibration
+    line (ConfigError) before anything runs: splitting (rigid_stones.splitting) for a
+    model whose stones do not split; a modifier the ``stages`` name (calibration
     parameters, loop effects) or a calibrated value (``parameters``: (file, {name:
-    value})) acting on flat joints where the model has none; the GPU batch (``backend``,
-    default the config's) for a model it does not step. Returns the model's name."""
+    value})) acting on flat joints where the model has none, or on splitting stones where
+    none split; the GPU batch (``backend``, default the config's) for a model it does not
+    step. Returns the model's name."""
     model = stone_model_named(model or cfg.get("stone_model", DEFAULT))
+    splits = splitting_of(cfg) is not None
+    if splits and not model.can_split:
+        raise ConfigError(file, "rigid_stones.splitting", f"true: stone_model {model.name}'s stones "
+                          "do not split; allowed: stone_model rigid, or splitting false")
     named = [(file, key if key != "parametric" else f"{key}.{m}", m) for key in stages
              for m in _named_modifiers(cfg, key)]
     if parameters is not None:
@@ -161,6 +190,9 @@ def check_stone_model(cfg, file, backend=None, model=None, parameters=None,
         if m in MODIFIERS and MODIFIERS[m].needs_flat_joints and not model.has_flat_joints:
             raise ConfigError(where, key, f"{m} acts on flat joints, which stone_model "
                               f"{model.name} has not; allowed: stone_model bonded, or leave {m} out")
+        if m in MODIFIERS and MODIFIERS[m].needs_splitting and not splits:
+            raise ConfigError(where, key, f"{m} acts on the strengths of splitting stones; allowed: "
+                              f"stone_model rigid with rigid_stones.splitting true, or leave {m} out")
     if not model.gpu_batch and (backend or cfg.get("backend", "cpu")) == "cuda":
         raise ConfigError(file, "backend", f"cuda: the GPU batch runs bonded stones only; allowed: "
                           f"backend cpu with stone_model {model.name}")
@@ -222,16 +254,22 @@ def conditioned_keys(kind, conditions_list):
 
 
 def scenario(kind, specimens, rig, cycles, modifiers=(), conditions=None, conditions_file="",
-             metrics=None, perturbation_m_s=0.0, perturbation_seed=0, mapping=None, stone_model=DEFAULT):
+             metrics=None, perturbation_m_s=0.0, perturbation_seed=0, mapping=None, stone_model=DEFAULT,
+             splitting=None):
     """A Scenario from plain values: ``rig`` a params object and ``mapping`` its stress
     mapping's record (both from conditioned_rig; None: none), ``modifiers`` [(name,
     {parameter: value})] checked against the registry and the stone model (``stone_model``:
-    ballaststudy.stones), ``conditions`` the loaded test (its covariates are kept)."""
+    ballaststudy.stones; ``splitting``: splitting_of's, None: its stones do not split),
+    ``conditions`` the loaded test (its covariates are kept)."""
     model = stone_model_named(stone_model)
+    if splitting is not None and not model.can_split:
+        raise ValueError(f"the {model.name} stone model's stones do not split")
     for name, values in modifiers:
         MODIFIERS[name].check(values)
         if MODIFIERS[name].needs_flat_joints and not model.has_flat_joints:
             raise ValueError(f"modifier {name} acts on flat joints; the {model.name} stone model has none")
+        if MODIFIERS[name].needs_splitting and splitting is None:
+            raise ValueError(f"modifier {name} acts on splitting stones; these do not split")
     specimens = tuple(str(s) for s in specimens)
     return Scenario(
         kind=kind, specimens=specimens, specimen_hashes=tuple(content_hash(s) for s in specimens),
@@ -241,4 +279,5 @@ def scenario(kind, specimens, rig, cycles, modifiers=(), conditions=None, condit
         covariates_json=_canonical((conditions or {}).get("covariates") or {}),
         metrics_json=_canonical(metrics), conditions_file=str(conditions_file or ""),
         perturbation_m_s=float(perturbation_m_s), perturbation_seed=int(perturbation_seed),
-        mapping_json=_canonical(mapping or {"stress_mapping": "none"}), stone_model=model.name)
+        mapping_json=_canonical(mapping or {"stress_mapping": "none"}), stone_model=model.name,
+        splitting_json=_canonical(splitting))

@@ -17,6 +17,7 @@ class StoneModel(ABC):
     has_flat_joints = False         # what a modifier acting on flat joints needs
     break_modes = ()                # the modes of its breakage records (metrics.breakage)
     gpu_batch = False               # the GPU batch (dem/gpu) steps its stones
+    can_split = False               # its stones can split (make's ``splitting``)
 
     @abstractmethod
     def make(self, sim, stone_balls, splitting=None):

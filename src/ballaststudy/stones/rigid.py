@@ -15,6 +15,7 @@ class RigidStones(StoneModel):
     name = "rigid"
     description = "each stone one rigid clump of its balls, split in two at its Weibull strength"
     break_modes = ("split",)
+    can_split = True
 
     def make(self, sim, stone_balls, splitting=None):
         """One clump per fragment (bond-connected group) of the live ``stone_balls``:

@@ -14,18 +14,20 @@ in the DEM with one or two parameters, never a correction added to a curve):
                    the specimen under the platen), a classic triaxial-test effect
     membrane_friction  the sides' friction (a membrane pressed into the surface voids grips
                    the stones; the plain rig's membrane carries no shear)
+    fatigue        splitting rigid stones lose strength with the cycles loaded near it
+                   (Miner's sum over a Basquin S-N curve): breakage over the long term
 
 A new modifier is one module defining a ``Modifier`` plus one line in MODIFIERS."""
 import math
 
 from ...schema import ConfigError, load_yaml
-from . import abrasion, end_restraint, fouling, material, membrane_friction, rate
+from . import abrasion, end_restraint, fatigue, fouling, material, membrane_friction, rate
 from .base import COVARIATES, Modifier, ModifierError, ModifierParameter, covariate  # noqa: F401 (the registry's face)
 
 MODIFIERS = {m.name: m for m in (
     material.F_STR, material.MU, material.E_STAR, material.KAPPA_STAR, material.MU_R,
     rate.MODIFIER, abrasion.MODIFIER, fouling.MODIFIER, end_restraint.MODIFIER,
-    membrane_friction.MODIFIER,
+    membrane_friction.MODIFIER, fatigue.MODIFIER,
 )}
 MATERIAL = tuple(n for n, m in MODIFIERS.items() if m.role == "material")   # a calibration's parameters
 EFFECTS = tuple(n for n, m in MODIFIERS.items() if m.role == "effect")       # the loop's candidates

@@ -48,6 +48,8 @@ class Modifier:
                                         # values, before ``configure`` (what a cache key sees)
     needs_flat_joints: bool = False     # acts on the stones' flat joints: a stone model
                                         # without them (rigid) cannot take it
+    needs_splitting: bool = False       # acts on the strengths of stones that split: rigid
+                                        # stones with splitting on
 
     @property
     def hook_only(self):
