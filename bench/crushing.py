@@ -5,10 +5,11 @@ stones'.
     NUMBA_NUM_THREADS=1 python bench/crushing.py results/bpm/box_test.nc --stones 60 \
         [--F-str-co 3.5] [--d0 0.04] [--seed 1] [--out crushing.csv]
 
-The bonded stones are crushed first; their fit (sigma0, m at d0) is the rigid stones'
-Weibull; the same stones, turned alike, are then crushed rigid and fitted again. Prints one
-line per stone and model, both fits with the 90 % interval of m, a two-sample KS test of
-the size-corrected strengths sigma_f (d/d0)^(2/m_bonded), and the core-seconds of each
+The bonded stones are crushed first; their fit (sigma0, m at d0), one per stone material
+(Table 4.2's hard and soft joints), is the rigid stones' Weibull; the same stones, turned
+alike, are then crushed rigid and fitted again. Prints one line per stone and model, the
+fits per model and material with the 90 % interval of m, per material a two-sample KS test
+of the size-corrected strengths sigma_f (d/d0)^(2/m_bonded), and the core-seconds of each
 model. Never a test."""
 import argparse
 import csv
@@ -19,6 +20,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from scipy import stats  # noqa: E402
 
+from ballaststudy.dem.materials import MATERIAL_NAMES, STONE_MATERIALS  # noqa: E402
 from ballaststudy.rig.crushing import CrushingParams, crush, weibull_fit  # noqa: E402
 from ballaststudy.rig.library import load_library  # noqa: E402
 
@@ -34,12 +36,18 @@ def crush_all(lib, stones, model, params, seed, splitting=None):
     return out, time.process_time() - t0
 
 
-def report(name, out, d0, seconds):
-    fit = weibull_fit([c.stress for c in out], [c.diameter for c in out], [c.failed for c in out], d0)
-    print(f"{name}: sigma0 {fit['sigma0']:.4g} Pa at d0 {d0} m, m {fit['m']:.3f} "
-          f"[{fit['m_low']:.3f}, {fit['m_high']:.3f}] (90 %), {fit['n_failed']}/{fit['n']} failed, "
-          f"{seconds:.1f} core-s", flush=True)
-    return fit
+def report(name, out, d0, seconds, materials):
+    """{material: fit} of the crushes ``out`` (``materials``: each stone's)."""
+    fits = {}
+    for mat in sorted(set(materials.values())):
+        sel = [c for c in out if materials[c.stone] == mat]
+        fit = weibull_fit([c.stress for c in sel], [c.diameter for c in sel], [c.failed for c in sel], d0)
+        print(f"{name} {MATERIAL_NAMES[mat]}: sigma0 {fit['sigma0']:.4g} Pa at d0 {d0} m, m {fit['m']:.3f} "
+              f"[{fit['m_low']:.3f}, {fit['m_high']:.3f}] (90 %), {fit['n_failed']}/{fit['n']} failed",
+              flush=True)
+        fits[mat] = fit
+    print(f"{name}: {seconds:.1f} core-s", flush=True)
+    return fits
 
 
 def main(argv=None):
@@ -56,23 +64,28 @@ def main(argv=None):
     params = CrushingParams(F_str_co=a.F_str_co)
     print(f"{a.library}: {len(stones)} of {len(lib)} stones, F_str_co {a.F_str_co}, "
           f"platens {params.platen_speed_m_s} m/s each, seed {a.seed}")
+    materials = {k: lib.stone(k).material for k in stones}
     bonded, tb = crush_all(lib, stones, "bonded", params, a.seed)
-    fb = report("bonded", bonded, a.d0, tb)
+    fb = report("bonded", bonded, a.d0, tb, materials)
+    law = [fb.get(mat, fb[min(fb)]) for mat in STONE_MATERIALS]     # a material not drawn: the other's
     rigid, tr = crush_all(lib, stones, "rigid", params, a.seed,
-                          dict(sigma0=fb["sigma0"], m=fb["m"], d0=a.d0))
-    fr = report("rigid", rigid, a.d0, tr)
-    size = lambda out: [c.stress * (c.diameter / a.d0) ** (2 / fb["m"]) for c in out if c.failed]  # noqa: E731
-    ks = stats.ks_2samp(size(bonded), size(rigid))
-    print(f"size-corrected strengths, bonded vs rigid: KS D {ks.statistic:.3f}, p {ks.pvalue:.3g}; "
-          f"rigid m within the bonded interval: {fb['m_low'] <= fr['m'] <= fb['m_high']}; "
-          f"core-s bonded/rigid {tb / max(tr, 1e-9):.1f}")
+                          dict(sigma0=[f["sigma0"] for f in law], m=[f["m"] for f in law], d0=a.d0))
+    fr = report("rigid", rigid, a.d0, tr, materials)
+    for mat, f in fb.items():
+        size = lambda out: [c.stress * (c.diameter / a.d0) ** (2 / f["m"]) for c in out  # noqa: E731
+                            if c.failed and materials[c.stone] == mat]
+        ks = stats.ks_2samp(size(bonded), size(rigid))
+        print(f"{MATERIAL_NAMES[mat]}: size-corrected strengths, bonded vs rigid: KS D {ks.statistic:.3f}, "
+              f"p {ks.pvalue:.3g}; rigid m within the bonded interval: {f['m_low'] <= fr[mat]['m'] <= f['m_high']}")
+    print(f"core-s bonded/rigid {tb / max(tr, 1e-9):.1f}")
     if a.out:
         with open(a.out, "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["model", "stone", "diameter_m", "force_N", "stress_Pa", "failed", "steps"])
+            w.writerow(["model", "stone", "material", "diameter_m", "force_N", "stress_Pa", "failed", "steps"])
             for name, out in (("bonded", bonded), ("rigid", rigid)):
                 for c in out:
-                    w.writerow([name, c.stone, c.diameter, c.force, c.stress, int(c.failed), c.steps])
+                    w.writerow([name, c.stone, MATERIAL_NAMES[materials[c.stone]], c.diameter, c.force,
+                                c.stress, int(c.failed), c.steps])
 
 
 if __name__ == "__main__":

@@ -234,3 +234,33 @@ def test_a_damaged_disk_splits_at_its_lowered_strength_and_the_peak_is_the_check
     assert log["stress"][0] - limit < limit - checked + 0.05 * limit        # no overshoot
     assert log["stress"][0] < 0.5 * log["strength"][0]           # well below the undamaged strength
     assert sim.clumps.damage.tolist() == [0.0, 0.0]                 # the pieces start undamaged
+
+
+def test_each_stone_material_draws_from_its_own_law(tmp_path):
+    """(sigma0, m) per stone material: a hard and a soft disk draw exactly the strength of
+    their own law from their streams; a checkpoint written before the soft law existed
+    (32 parameters) loads with the one law it ran for both."""
+    sim = Simulation(gravity=(0.0, 0.0), domain=(-0.2, -0.2, 0.2, 0.2))
+    sim.set_contact_material(ContactMaterial(E=1e8, kappa=2.5, mu=0.5))
+    p = _disk()
+    clumps = []
+    for shift, material in ((-0.05, 0), (0.05, 1)):
+        ids = sim.add_balls(p[:, 0] + shift, p[:, 1], np.full(len(p), R_PEBBLE), RHO, stone_id=material,
+                            material_id=material)
+        clumps.append(sim.make_clumps([ids])[0])
+        sim._follow_clumps(ids)
+    sim.enable_crushing(clumps, sigma0=[3e6, 2e5], m=[6.0, 2.0], d0=0.04, seed=9, fines_diameter=0.0, every=10)
+    b = sim.balls
+    for c, (s0, m) in zip(clumps, ((3e6, 6.0), (2e5, 2.0))):
+        peb = np.flatnonzero(b.clump == c)
+        d = 2.0 * np.sqrt((b.rad[peb] ** 2).sum())
+        assert sim.clumps.strength[c] == crushing.weibull_strength(
+            crushing.stream_uniform(9, peb.min(), 0), d, s0, m, 0.04)
+    assert sim.crushing_settings()["sigma0_Pa"] == [3e6, 2e5]
+    path = tmp_path / "old.npz"
+    sim.save_checkpoint(path)
+    with np.load(path) as z:
+        old = {k: z[k] for k in z.files}
+    old["s_prm"] = old["s_prm"][:32]
+    np.savez(path, **old)
+    assert Simulation.load_checkpoint(path).crushing_settings()["weibull_modulus"] == [6.0, 6.0]

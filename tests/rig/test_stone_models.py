@@ -58,6 +58,7 @@ def test_a_rigid_loading_run_records_its_cycles_without_breakage(rigid_run):
     ds = to_dataset(rigid_run)
     assert ds.attrs["stone_model"] == "rigid" and ds.sizes["cycle"] == CYCLES
     assert np.all(ds["breakage_rate"].values == 0.0) and ds.sizes.get("breakage", 0) == 0
+    assert np.all(ds["broken_mass_share"].values == 0.0)
     assert np.all(np.isfinite(ds["settlement"])) and np.all((ds["void_ratio"] > 0) & (ds["void_ratio"] < 1))
     assert len(np.unique(ds["n_fragments"].values)) == 1
 
@@ -116,6 +117,21 @@ def test_rigid_stones_that_split_are_recorded_and_rated_per_stone(splitting_run)
     assert in_cycles <= n
     # every split made a new clump; the fragments are the pieces
     assert rig.fragments().max() + 1 == stones + n - int((log["fines"] > 0).sum())
+    # the mass share outside each stone's largest piece, from the engine's clump masses
+    # (pieces grouped by the stone their lowest ball was in when loading began)
+    b, cl = rig.sim.balls, rig.sim.clumps
+    unit = run.stone_units(len(b))
+    largest, total = {}, 0.0
+    for c in range(len(cl.mass)):
+        peb = np.flatnonzero(b.clump == c)
+        if not len(peb) or unit[peb.min()] < 0:
+            continue                            # the plate
+        total += cl.mass[c]
+        if (b.alive[peb] == 1).any():           # not fines
+            largest[unit[peb.min()]] = max(largest.get(unit[peb.min()], 0.0), cl.mass[c])
+    share = 1.0 - sum(largest.values()) / total
+    assert ds["broken_mass_share"].values[-1] == pytest.approx(share, rel=1e-9) and share > 0
+    assert np.all(np.diff(ds["broken_mass_share"].values) >= 0)
 
 
 def test_a_splitting_run_resumes_bitwise_after_a_crash(splitting_run, assembled, tmp_path):

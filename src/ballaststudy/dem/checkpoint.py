@@ -12,6 +12,7 @@ import tempfile
 import numpy as np
 
 from .law import ContactLaw
+from . import params as P
 from .params import new_params
 from .state import Balls, Bonds, BreakLog, Clumps, Pairs, SplitLog, WallPairs, Walls
 
@@ -59,7 +60,10 @@ def load_state(path, sim):
         setattr(sim, attr, cls.from_dict(d, prefix))
     for name in _ARRAYS:
         setattr(sim, name, np.array(d["s_" + name]))
-    sim.prm = np.concatenate([sim.prm, new_params()[len(sim.prm):]])   # parameters added since
+    n_saved = len(sim.prm)
+    sim.prm = np.concatenate([sim.prm, new_params()[n_saved:]])   # parameters added since
+    if n_saved <= P.CRUSH_SIGMA0_SOFT:       # one splitting law then, for every material
+        sim.prm[P.CRUSH_SIGMA0_SOFT], sim.prm[P.CRUSH_M_SOFT] = sim.prm[P.CRUSH_SIGMA0], sim.prm[P.CRUSH_M]
     for k in _META:
         v = meta[k]
         setattr(sim, k, tuple(v) if isinstance(v, list) else v)

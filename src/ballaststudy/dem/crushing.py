@@ -11,8 +11,10 @@ pebbles. The choices, argued in docs/stone-models/splitting-plan.md:
   neighbour makes F_max the force between two stones, not between two pebbles.
 - Strength: Weibull with a weakest-link size effect, survival exp(-(A/A0)(sigma/sigma0)^m),
   so a stone of diameter d has characteristic strength sigma0 (d/d0)^(-2/m) (2D; 3D
-  is -3/m, geoLAMMPS fix crushing). Each piece draws its own from a counter-based stream
-  keyed on (seed, its lowest ball id, generation): no dependence on the order stones break.
+  is -3/m, geoLAMMPS fix crushing); (sigma0, m) per stone material (Table 4.2's soft
+  joints make stones ~20x weaker than the hard ones: one law cannot hold both). Each
+  piece draws its own from a counter-based stream keyed on (seed, its lowest ball id,
+  generation): no dependence on the order stones break.
 - Split: a line through the centre of mass along the most compressive principal direction
   of the stone's average stress (1/A) sum f (x) r (a Brazilian disk splits along its
   loading axis), pebbles partitioned by side; turned 90 deg if one side is empty.
@@ -32,6 +34,7 @@ from numba import njit
 
 from . import params as P
 from .clumps import pebble_sums
+from .materials import HARD, SOFT
 from .neighbours import seg_closest
 
 _MASK64 = (1 << 64) - 1
@@ -178,38 +181,53 @@ def equivalent_diameter(area):
     return np.sqrt(4.0 * np.asarray(area) / np.pi)
 
 
-def draw_strength(prm, pebbles, rad, generation):
-    """The strength of the piece made of balls ``pebbles`` (radii ``rad``) at
-    ``generation``, from its own stream (keyed on its lowest ball id)."""
+# the parameter slots of each stone material's law (sigma0, m)
+_LAW = {HARD: (P.CRUSH_SIGMA0, P.CRUSH_M), SOFT: (P.CRUSH_SIGMA0_SOFT, P.CRUSH_M_SOFT)}
+
+
+def draw_strength(prm, pebbles, rad, generation, material):
+    """The strength of the piece made of balls ``pebbles`` (radii ``rad``) of stone
+    ``material`` at ``generation``, from its own stream (keyed on its lowest ball id)."""
     u = stream_uniform(prm[P.CRUSH_SEED], int(np.min(pebbles)), generation)
     d = float(equivalent_diameter(np.pi * (np.asarray(rad) ** 2).sum()))
-    return float(weibull_strength(u, d, prm[P.CRUSH_SIGMA0], prm[P.CRUSH_M], prm[P.CRUSH_D0]))
+    s0, m = _LAW[int(material)]
+    return float(weibull_strength(u, d, prm[s0], prm[m], prm[P.CRUSH_D0]))
+
+
+def _per_material(value, name):
+    """(hard, soft) from one number (both) or a pair."""
+    pair = tuple(float(v) for v in np.broadcast_to(np.asarray(value, float), (2,)))
+    if not all(v > 0 and math.isfinite(v) for v in pair):
+        raise ValueError(f"crushing: {name} must be > 0 (one number, or one per stone material: hard, soft)")
+    return pair
 
 
 def enable(sim, clumps, sigma0, m, d0, seed, fines_diameter, every):
-    """Make ``clumps`` breakable: Weibull (sigma0 [Pa] at diameter d0 [m], modulus m),
-    strengths drawn for generation 0, fines below ``fines_diameter`` [m], checked every
-    ``every`` steps."""
-    if not (sigma0 > 0 and m > 0 and d0 > 0 and fines_diameter >= 0 and int(every) >= 1
-            and 0 <= int(seed) < 2 ** 53):
-        raise ValueError("crushing: need sigma0 > 0, m > 0, d0 > 0, fines_diameter >= 0, every >= 1 "
+    """Make ``clumps`` breakable: Weibull (sigma0 [Pa] at diameter d0 [m], modulus m; each
+    one number or a (hard, soft) pair, by stone material), strengths drawn for generation
+    0, fines below ``fines_diameter`` [m], checked every ``every`` steps."""
+    sigma0, m = _per_material(sigma0, "sigma0"), _per_material(m, "m")
+    if not (d0 > 0 and fines_diameter >= 0 and int(every) >= 1 and 0 <= int(seed) < 2 ** 53):
+        raise ValueError("crushing: need d0 > 0, fines_diameter >= 0, every >= 1 "
                          "and 0 <= seed < 2^53 (kept exactly in the float parameters)")
     p = sim.prm
-    p[P.CRUSH_EVERY], p[P.CRUSH_SIGMA0], p[P.CRUSH_M] = int(every), sigma0, m
-    p[P.CRUSH_D0], p[P.CRUSH_SEED], p[P.CRUSH_FINES] = d0, int(seed), fines_diameter
+    for material, (s0, mm) in _LAW.items():
+        p[s0], p[mm] = sigma0[material], m[material]
+    p[P.CRUSH_EVERY], p[P.CRUSH_D0], p[P.CRUSH_SEED], p[P.CRUSH_FINES] = int(every), d0, int(seed), fines_diameter
     b = sim.balls
     for c in clumps:
         peb = np.flatnonzero((b.clump == c) & (b.alive == 1))
-        sim.clumps.strength[c] = draw_strength(p, peb, b.rad[peb], sim.clumps.gen[c])
+        sim.clumps.strength[c] = draw_strength(p, peb, b.rad[peb], sim.clumps.gen[c], b.mat[peb[0]])
 
 
 def settings(sim):
-    """The splitting law a Simulation runs ({sigma0_Pa, weibull_modulus, d0_m, seed,
-    fines_diameter_m, every_steps}; None when its stones do not split)."""
+    """The splitting law a Simulation runs ({sigma0_Pa, weibull_modulus (each [hard,
+    soft]), d0_m, seed, fines_diameter_m, every_steps}; None when its stones do not split)."""
     p = sim.prm
     if not p[P.CRUSH_EVERY]:
         return None
-    return dict(sigma0_Pa=float(p[P.CRUSH_SIGMA0]), weibull_modulus=float(p[P.CRUSH_M]),
+    return dict(sigma0_Pa=[float(p[s0]) for s0, _ in _LAW.values()],
+                weibull_modulus=[float(p[m]) for _, m in _LAW.values()],
                 d0_m=float(p[P.CRUSH_D0]), seed=int(p[P.CRUSH_SEED]),
                 fines_diameter_m=float(p[P.CRUSH_FINES]), every_steps=int(p[P.CRUSH_EVERY]))
 
@@ -304,7 +322,7 @@ def split_clump(sim, c, other):
         # inertial = real: the rebuild after the split applies density scaling, if on
         pieces.append(dict(pos=(cx, cy), vel=(v[0] - w * (cy - x[1]), v[1] + w * (cx - x[0])),
                            omega=w, theta=0.0, mass=m, inertia=inertia, imass=m, iinertia=inertia,
-                           gen=gen, strength=draw_strength(sim.prm, peb, b.rad[peb], gen),
+                           gen=gen, strength=draw_strength(sim.prm, peb, b.rad[peb], gen, b.mat[peb[0]]),
                            damage=0.0, peak=0.0))
     for name, value in pieces[0].items():      # the parent's row: the piece with its lowest ball
         getattr(cl, name)[c] = value

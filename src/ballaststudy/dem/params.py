@@ -27,11 +27,13 @@ SHIFT_Y = 25
 # rigid stones that split (crushing.py); CRUSH_EVERY = 0: none split
 CRUSH_EVERY = 26  # stone stresses checked at steps that are multiples of this [-]
 CRUSH_SIGMA0 = 27  # Weibull characteristic strength of a stone of diameter CRUSH_D0 [Pa]
-CRUSH_M = 28      # Weibull modulus [-]
+CRUSH_M = 28      # Weibull modulus [-]                       (these two: material 0, hard)
 CRUSH_D0 = 29     # reference diameter [m]
 CRUSH_SEED = 30   # seed of the strength streams [-]
 CRUSH_FINES = 31  # pieces of an equivalent diameter below this are fines (removed) [m]
-NPRM = 32
+CRUSH_SIGMA0_SOFT = 32  # the same two for stones of material 1 (soft: Table 4.2's weaker
+CRUSH_M_SOFT = 33       # joints make weaker stones, a law of their own)
+NPRM = 34
 
 # energy accumulator slots (``energy_acc`` array)
 E_DASHPOT = 0     # work dissipated by contact dashpots [J]

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .breakage import breakage_rate
+from .breakage import breakage_rate, broken_mass_share
 from .coordination import coordination_numbers
 from .cycle import PACKING_KEYS, MetricsParams
 from .fragments import fragments
@@ -66,6 +66,8 @@ def compute_biaxial_cycle(snapshot, params=MetricsParams(), solid_cache=None):
     pos = np.asarray(s["pos"], float)
     rad = np.asarray(s["rad"], float)
     nf, labels = fragments(len(rad), s["bond_i"], s["bond_j"], s["bond_intact"], s["ballast"])
+    if "stone_unit" in s:
+        out["broken_mass_share"] = broken_mass_share(s["stone_unit"], labels, s["mass"])
     cn = coordination_numbers(labels, nf, s["contact_i"], s["contact_j"], s["contact_fn"],
                               p.contact_force_threshold, False)
 

@@ -7,6 +7,11 @@ is splits per stone. The
 equations define plain ratios, so they are returned as fractions (units "1"); the thesis'
 figures quote them in percent ("smaller than 1%", l. 1228) - multiply by 100 to plot.
 
+Neither rate compares the two models (a bond is not a stone), so both also give
+``broken_mass_share``: the share of the stones' mass no longer in the largest piece of the
+stone (the fragment when loading began) it belonged to - what a sieve sees, in the same
+units for either model (ball masses: the stones' materials differ in density).
+
 The engine logs one record per broken flat-joint *element*. The thesis uses N_r = 1
 element per bond (Table 4.2), so a record is a broken bond; for N_r > 1 pass
 ``n_elements_per_bond`` and the denominator becomes all installed elements.
@@ -75,3 +80,27 @@ def breakage_rate(break_mode, break_step, n_bonds_installed, cycle_bounds, n_ele
     return dict(breakage_rate_tension=n_t / total, breakage_rate_shear=n_s / total,
                 breakage_rate=(n_t + n_s + n_x) / total, breakages_per_cycle=np.diff(cum),
                 broken_tension=n_t, broken_shear=n_s)
+
+
+def broken_mass_share(units, labels, mass):
+    """Share of the stones' mass no longer in the largest fragment of their unit:
+    1 - sum_u max_f M(u, f) / sum_u M(u).
+
+    units: (n,) the fragment each ball was in when loading began (-1: no stone ball then).
+    labels: (n,) its fragment now (-1: deleted - a rigid stone's fines - or no stone).
+    mass: (n,) ball masses [kg] (real, not density-scaled). Returns a fraction (0: every
+    stone whole)."""
+    units = np.asarray(units, np.int64)
+    labels = np.asarray(labels, np.int64)
+    mass = np.asarray(mass, float)
+    was = units >= 0
+    total = mass[was].sum()
+    if total <= 0.0:
+        raise ValueError("no stone balls when loading began: the share is undefined")
+    now = was & (labels >= 0)
+    u, f, m = units[now], labels[now], mass[now]
+    base = max(int(labels.max()), 0) + 1
+    piece, idx = np.unique(u * base + f, return_inverse=True)   # one per (unit, fragment now)
+    largest = np.zeros(int(units.max()) + 1)
+    np.maximum.at(largest, piece // base, np.bincount(idx, weights=m))
+    return float(1.0 - largest.sum() / total)

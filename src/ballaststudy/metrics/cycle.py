@@ -9,7 +9,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .breakage import breakage_rate
+from .breakage import breakage_rate, broken_mass_share
 from .coordination import coordination_numbers, ghost_particles, in_shoulder, touching_container
 from .force_propagation import force_propagation_angle
 from .fragments import fragment_centroids, fragments
@@ -81,6 +81,9 @@ PACKING_KEYS = {
     "n_elements_per_bond": "int, optional (default 1 = thesis N_r)",
     "cycle_start_step": "int: first step of this cycle",
     "cycle_end_step": "int: first step after this cycle",
+    "stone_unit": "(n,) int, optional: the fragment each ball was in when loading began "
+                  "(-1: none); with mass, gives broken_mass_share",
+    "mass": "(n,) ball masses [kg], optional (real, not density-scaled)",
 }
 
 SNAPSHOT_KEYS = {
@@ -134,6 +137,8 @@ def compute_cycle(snapshot, params=MetricsParams(), y_reference=None, solid_cach
     rad = np.asarray(s["rad"], float)
     nf, labels = fragments(len(rad), s["bond_i"], s["bond_j"], s["bond_intact"], s.get("ballast"))
     out["n_fragments"] = nf
+    if "stone_unit" in s:
+        out["broken_mass_share"] = broken_mass_share(s["stone_unit"], labels, s["mass"])
 
     # void ratio (eq. 4.10)
     vr = void_ratio(pos, rad, labels, nf, s["bond_i"], s["bond_j"], s["bond_intact"],

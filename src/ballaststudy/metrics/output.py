@@ -14,6 +14,7 @@ VARIABLES = {
     "breakage_rate_tension": ("1", "breakage rate in tension BR_T = FJ_T / FJ_Total (eq. 4.6), cumulative, fraction", "f8"),
     "breakage_rate_shear": ("1", "breakage rate in shear BR_S = FJ_S / FJ_Total (eq. 4.7), cumulative, fraction", "f8"),
     "breakage_rate": ("1", "breakage rate BR = BR_T + BR_S (eq. 4.8), cumulative, fraction", "f8"),
+    "broken_mass_share": ("1", "share of the stones' mass no longer in the largest piece of the stone it belonged to when loading began (either stone model; a rigid stone's fines count as broken), cumulative, fraction", "f8"),
     "breakages_per_cycle": ("1", "number of flat-joint breakages during the cycle", "i8"),
     "broken_tension": ("1", "flat-joint bonds broken in tension FJ_T, cumulative", "i8"),
     "broken_shear": ("1", "flat-joint bonds broken in shear FJ_S, cumulative", "i8"),

@@ -56,6 +56,8 @@ class CyclicRun:
         self.samples = {k: [] for k in ("step", "cycle", *self.CHANNELS)}
         self.cyc = {k: [] for k in self.CYCLE_FIELDS}
         self.hooks = []      # callables(run, cycle) at the end of each cycle (VTK...)
+        # the stones as loading begins: what broken_mass_share measures breakage against
+        self.stone_unit = np.asarray(rig.fragments())
         self._checkpoint_due = False
 
     # --------------------------------------------------------------- events
@@ -134,6 +136,13 @@ class CyclicRun:
     def on_cycle_end(self):
         """After a cycle's records (caches to reset at checkpoints...)."""
 
+    def stone_units(self, n):
+        """The stone each of balls 0..n-1 was when loading began (-1: none): the snapshot's
+        ``stone_unit``."""
+        out = np.full(n, -1, np.int64)
+        out[: len(self.stone_unit)] = self.stone_unit
+        return out
+
     def _thin_samples(self, k0, every=1):
         """Keep every ``every``-th sample of the finished cycle (and its last)."""
         if every <= 1:
@@ -176,6 +185,7 @@ class CyclicRun:
         data = {"samp_" + k: np.asarray(v) for k, v in self.samples.items()}
         data.update({"cyc_" + k: np.asarray(v, float) for k, v in self.cyc.items()})
         data.update(self._extra_arrays())
+        data["stone_unit"] = self.stone_unit
         data["engine"] = np.frombuffer(self.rig.engine_bytes(), np.uint8)
         data["state"] = np.array(json.dumps(asdict(self.s)))
         data.update(self.control.to_dict())
@@ -202,6 +212,8 @@ class CyclicRun:
             for k in run.cyc:
                 run.cyc[k] = d["cyc_" + k].tolist()
             run._load_extra(d)
+            if "stone_unit" in d:     # older checkpoints: the stones at the resume
+                run.stone_unit = d["stone_unit"]
         except (KeyError, TypeError, ValueError) as err:   # ValueError: JSON or engine bytes
             raise ConfigError(path, None, f"not a checkpoint of this version ({err}); "
                               "run again with --restart") from None

@@ -257,7 +257,8 @@ class LoadingRun(CyclicRun):
             break_step=br["step"][s.log0:],
             break_mode=mode_codes(br["mode"][s.log0:]).astype(np.int32),
             n_bonds_installed=int(s.n_bonds0), n_elements_per_bond=rig.stones.elements_per_unit(sim),
-            cycle_start_step=int(s.cycle_start_step), cycle_end_step=int(sim.step) + 1)
+            cycle_start_step=int(s.cycle_start_step), cycle_end_step=int(sim.step) + 1,
+            stone_unit=self.stone_units(n), mass=b.mass.copy())
 
     def behaviours(self):
         """This cycle's behaviours from ``ballaststudy.metrics`` (JSON-safe dict)."""

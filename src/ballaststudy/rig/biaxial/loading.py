@@ -558,7 +558,8 @@ class BiaxialRun(CyclicRun):
             break_step=br["step"][s.log0:],
             break_mode=mode_codes(br["mode"][s.log0:]).astype(np.int64),
             n_bonds_installed=s.n_bonds0, n_elements_per_bond=rig.stones.elements_per_unit(sim),
-            cycle_start_step=s.cycle_start_step, cycle_end_step=sim.step + 1)
+            cycle_start_step=s.cycle_start_step, cycle_end_step=sim.step + 1,
+            stone_unit=self.stone_units(len(b)), mass=b.mass)
 
     def behaviours(self):
         """Strains, breakage (eqs. 4.6-4.8), fragments, mean coordination and void ratio of
