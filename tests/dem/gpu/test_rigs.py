@@ -47,7 +47,9 @@ def wall_cycles(sim, cycles, dt_factor=None):
                v_min=5e-4, v_max=5e-3, brake=0.3)
     ctl.wall_position(right, 0)
     ctl.build()
-    run = WallCycles(types.SimpleNamespace(sim=sim, stones=STONE_MODELS["bonded"]), cycles, ctl)
+    rig = types.SimpleNamespace(sim=sim, stones=STONE_MODELS["bonded"],
+                                fragments=lambda: STONE_MODELS["bonded"].fragments(sim, len(sim.balls)))
+    run = WallCycles(rig, cycles, ctl)
     run.dt_factor = dt_factor
     return run
 
