@@ -3,9 +3,9 @@ after it was stopped, from its checkpoint (the per-cycle rows it holds).
 
     python bench/long_run.py RUN/metrics.nc [--at 1 10 100 1000 10000 100000]
 
-Prints per N the settlement [mm], the breakage rate [%], the void ratio and the force
-propagation angle at the end of cycle N (1-based), and the settlement gained per decade of
-N. Never a test."""
+Prints per N the settlement [mm], the breakage rate [%], the broken mass share [%] (NaN in
+files written before it existed), the void ratio and the force propagation angle at the
+end of cycle N (1-based), and the settlement gained per decade of N. Never a test."""
 import argparse
 import json
 from pathlib import Path
@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-NAMES = (("settlement", 1e3, "mm"), ("breakage_rate", 100.0, "%"), ("void_ratio", 1.0, "1"),
-         ("fpa", 1.0, "deg"))
+NAMES = (("settlement", 1e3, "mm"), ("breakage_rate", 100.0, "%"), ("broken_mass_share", 100.0, "%"),
+         ("void_ratio", 1.0, "1"), ("fpa", 1.0, "deg"))
 
 
 def rows(path):
@@ -22,11 +22,12 @@ def rows(path):
     path = Path(path)
     if path.is_file():
         with xr.open_dataset(path) as ds:
-            return {n: ds[n].values.astype(float) for n, _, _ in NAMES}, str(path)
+            return {n: ds[n].values.astype(float) if n in ds else np.full(ds.sizes["cycle"], np.nan)
+                    for n, _, _ in NAMES}, str(path)
     ckpt = path.with_name(path.stem + ".checkpoint.npz")
     with np.load(ckpt) as z:
         state = json.loads(str(z["state"]))
-    return ({n: np.array([r[n] for r in state["rows"]], float) for n, _, _ in NAMES},
+    return ({n: np.array([r.get(n, np.nan) for r in state["rows"]], float) for n, _, _ in NAMES},
             f"{ckpt} (cycle {state['cycle']})")
 
 

@@ -138,24 +138,37 @@ def _between_platens(sigma0=2e6, fines=0.0, every=10):
     return sim, c
 
 
-def test_a_disk_between_platens_splits_at_its_strength_along_the_loading_axis():
-    sim, c = _between_platens()
-    strength = sim.clumps.strength[c]
-    peak = 0.0
+def _closed_until_split(sim, c):
+    """Close the platens 10 steps at a time until the disk splits: the largest stress at
+    the checks before (the kernel's ``peak`` equal to it throughout)."""
+    checked = 0.0
     while not len(sim.splits) and sim.step < 40000:
         sim.run(10)
         if not len(sim.splits):
             fmax, _, area = crushing.loads(sim)
-            peak = crushing.characteristic_stress(1.0, fmax, area)[c]
-            assert peak < strength           # checked every 10 steps: none missed
+            checked = max(checked, crushing.characteristic_stress(1.0, fmax, area)[c])
+            assert sim.clumps.peak[c] == checked
+    return checked
+
+
+@pytest.mark.parametrize("damage", [0.0, 0.6])
+def test_a_disk_between_platens_splits_at_its_strength_along_the_loading_axis(damage):
+    """Undamaged, at its strength; with damage D at strength (1 - D), well below it; not
+    before (checked every 10 steps: none missed) and with no overshoot; along the loading
+    axis; the pieces start undamaged."""
+    sim, c = _between_platens()
+    sim.clumps.damage[c] = damage
+    strength = sim.clumps.strength[c]
+    limit = strength * (1.0 - damage)
+    checked = _closed_until_split(sim, c)
     log = sim.split_log()
-    assert len(log["step"]) == 1 and log["step"][0] % 10 == 0
-    assert log["strength"][0] == strength and log["stress"][0] >= strength
-    assert log["stress"][0] - strength < strength - peak + 0.05 * strength   # no overshoot
+    assert checked < limit and len(log["step"]) == 1 and log["step"][0] % 10 == 0
+    assert log["strength"][0] == strength and log["stress"][0] >= limit
+    assert log["stress"][0] - limit < limit - checked + 0.05 * limit   # no overshoot
     angle = math.degrees(math.acos(abs(log["uy"][0])))
     assert angle < 5.0, angle
     assert log["n_parent"][0] + log["n_child"][0] == len(_disk())
-    assert sim.clumps.gen.tolist() == [1, 1]
+    assert sim.clumps.gen.tolist() == [1, 1] and sim.clumps.damage.tolist() == [0.0, 0.0]
 
 
 def test_pieces_below_the_fines_size_leave_with_their_mass_logged():
@@ -212,28 +225,6 @@ def test_fatigue_damage_is_miners_sum_over_the_cycles_peaks():
     sim.clumps.peak[c] = 0.99 * s
     sim.accumulate_damage(1.0, 0.0)
     assert sim.clumps.damage[c] == 1.0
-
-
-def test_a_damaged_disk_splits_at_its_lowered_strength_and_the_peak_is_the_checks_largest():
-    """With damage D the disk between platens splits once its characteristic stress reaches
-    strength (1 - D), not before; until then the kernel's peak is exactly the largest
-    stress at its checks."""
-    sim, c = _between_platens()
-    sim.clumps.damage[c] = 0.6
-    limit = sim.clumps.strength[c] * 0.4
-    checked = 0.0
-    while not len(sim.splits) and sim.step < 40000:
-        sim.run(10)
-        if not len(sim.splits):
-            fmax, _, area = crushing.loads(sim)
-            sig = crushing.characteristic_stress(1.0, fmax, area)[c]
-            checked = max(checked, sig)
-            assert sim.clumps.peak[c] == checked and sig < limit
-    log = sim.split_log()
-    assert len(log["step"]) == 1 and log["stress"][0] >= limit
-    assert log["stress"][0] - limit < limit - checked + 0.05 * limit        # no overshoot
-    assert log["stress"][0] < 0.5 * log["strength"][0]           # well below the undamaged strength
-    assert sim.clumps.damage.tolist() == [0.0, 0.0]                 # the pieces start undamaged
 
 
 def test_each_stone_material_draws_from_its_own_law(tmp_path):
