@@ -7,11 +7,12 @@ Prints per N the settlement [mm], the breakage rate [%], the broken mass share [
 files written before it existed), the void ratio and the force propagation angle at the
 end of cycle N (1-based), and the settlement gained per decade of N. Never a test."""
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+
+from ballaststudy.rig.cyclic import json_of
 
 NAMES = (("settlement", 1e3, "mm"), ("breakage_rate", 100.0, "%"), ("broken_mass_share", 100.0, "%"),
          ("void_ratio", 1.0, "1"), ("fpa", 1.0, "deg"))
@@ -26,7 +27,7 @@ def rows(path):
                     for n, _, _ in NAMES}, str(path)
     ckpt = path.with_name(path.stem + ".checkpoint.npz")
     with np.load(ckpt) as z:
-        state = json.loads(str(z["state"]))
+        state = json_of(z["state"])
     return ({n: np.array([r.get(n, np.nan) for r in state["rows"]], float) for n, _, _ in NAMES},
             f"{ckpt} (cycle {state['cycle']})")
 

@@ -149,3 +149,21 @@ def test_a_splitting_run_resumes_bitwise_after_a_crash(splitting_run, assembled,
         assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
     for k, v in rig.sim.split_log().items():
         assert np.array_equal(resumed.rig.sim.split_log()[k], v), k
+
+
+def test_a_checkpoint_keeps_its_run_state_as_utf8_and_reads_the_older_string(rigid_run, assembled, tmp_path):
+    """The run state (its per-cycle rows grow with the cycles) is UTF-8 bytes, a quarter of
+    the numpy string it was; a checkpoint holding that string resumes to the same state."""
+    ck = tmp_path / "ck.npz"
+    first = LoadingRun(_rigid(assembled[0]), cycles=CYCLES, checkpoint=ck, checkpoint_every=1)
+    first.run(stop_after=1)
+    first.advance(max_steps=200)
+    with np.load(ck) as z:
+        data = {k: z[k] for k in z.files}
+    assert data["state"].dtype == np.uint8
+    text = data["state"].tobytes().decode()
+    older = tmp_path / "older.npz"
+    np.savez(older, **{**data, "state": np.array(text)})
+    assert np.array(text).nbytes == 4 * data["state"].nbytes
+    a, b = LoadingRun.from_checkpoint(ck), LoadingRun.from_checkpoint(older)
+    assert a.s == b.s and a.s.cycle == 1

@@ -37,6 +37,17 @@ class CycleState:
                                      # a specimen that failed, set by the rig)
 
 
+def json_array(obj):
+    """``obj`` as JSON in UTF-8 bytes (a uint8 array): a checkpoint's run state, whose
+    per-cycle rows grow with the cycles (a numpy string would take 4 bytes a character)."""
+    return np.frombuffer(json.dumps(obj).encode(), np.uint8)
+
+
+def json_of(array):
+    """The object of a ``json_array`` (or of the numpy string older checkpoints hold)."""
+    return json.loads(array.tobytes().decode() if array.dtype == np.uint8 else str(array))
+
+
 class CyclicRun:
     CHANNELS = {}
     CYCLE_FIELDS = {}
@@ -187,7 +198,7 @@ class CyclicRun:
         data.update(self._extra_arrays())
         data["stone_unit"] = self.stone_unit
         data["engine"] = np.frombuffer(self.rig.engine_bytes(), np.uint8)
-        data["state"] = np.array(json.dumps(asdict(self.s)))
+        data["state"] = json_array(asdict(self.s))
         data.update(self.control.to_dict())
         data["layout"] = np.array(json.dumps(vars(self.rig.layout)))
         data["params"] = np.array(json.dumps(self.rig.params.to_dict()))
@@ -205,7 +216,7 @@ class CyclicRun:
                                        json.loads(str(d["params"])), path)
             run = cls(rig, int(d["cycles"]) if cycles is None else cycles, checkpoint=path,
                       resumed=True, **kwargs)
-            run.s = cls.State(**json.loads(str(d["state"])))
+            run.s = cls.State(**json_of(d["state"]))
             run.control.load(d)
             for k in run.samples:
                 run.samples[k] = d["samp_" + k].tolist()
