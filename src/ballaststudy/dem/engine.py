@@ -22,7 +22,7 @@ from . import params as P
 from .bonds import bond_forces, bond_scratch
 from .clumps import gather_clumps, place_pebbles
 from .contacts import pack_kinematics, pair_forces
-from .control import EVERY, PENDING, actuate, control_step
+from .control import COUNT, EVERY, PENDING, actuate, control_step
 from .crushing import overloaded
 from .integrate import (clumps_damp_kick, critical_dt, first_half, guards, pebbles_moved,
                         second_half)
@@ -88,6 +88,13 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         fa[i, 1] = balls.force[i, 1]
         fa[i, 2] = balls.moment[i]
     bond_work = bond_scratch(bonds.i.shape[0])
+    # joints only break within a chunk: none active now (rigid stones keep theirs as a
+    # record, inactive), none all chunk
+    jointed = False
+    for b in range(bonds.active.shape[0]):
+        if bonds.active[b]:
+            jointed = True
+            break
     has_clumps = clumps.pos.shape[0] > 0
     pebbles = np.nonzero(balls.clump >= 0)[0]     # a clump's balls, ascending
     controlled = ctl.cfg[EVERY] > 0
@@ -99,8 +106,9 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         dt_next = dt
         prm[P.WALL_TRAVEL] += move_walls(walls.seg, walls.vel, walls.omega, walls.centre, dt)
         d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps)
+        pebbles_astray = False
         if has_clumps:
-            place_pebbles(prm, kin, balls, clumps, pebbles)
+            pebbles_astray = place_pebbles(prm, kin, balls, clumps, pebbles)
             d1, d2, near_wall = pebbles_moved(prm, kin, fa, balls, pebbles, d1, d2, near_wall)
         if nfree > 0:       # next step's common shift: this step's mean displacement
             prm[P.SHIFT_X] = sx / nfree
@@ -119,14 +127,20 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         cnt[0] += 1
         prm[P.TIME] += dt
         pair_forces(law, run, kin, fa, pr, bonds.active)
-        if bonds.i.shape[0] > 0:
+        if jointed:
             bond_forces(run, kin, balls, fa, bonds, log, bond_work)
         wall_forces(law, run, kin, fa, walls, wp)
         suspect = second_half(prm, kin, fa, balls, run.eacc)
         if has_clumps:
             gather_clumps(prm[P.GX], prm[P.GY], kin, fa, balls, clumps, pebbles)
             run.eacc[P.E_LOCAL] += clumps_damp_kick(clumps, 0.5 * dt, dt)
-            suspect |= place_pebbles(prm, kin, balls, clumps, pebbles)
+            # the pebbles' full-step motion only where the chunk may end after this step
+            # (its last, a stress check, a controller's reading) or a guard looks: in
+            # between nothing reads it (the next step places them again)
+            if (pebbles_astray or suspect or k == nsteps - 1
+                    or (crush_every > 0 and cnt[0] % crush_every == 0)
+                    or (controlled and ctl.cfg[COUNT] + 1 >= ctl.cfg[EVERY])):
+                suspect |= place_pebbles(prm, kin, balls, clumps, pebbles)
         st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
         # a controller's event at the same step wins the status; Simulation._run_kernel
