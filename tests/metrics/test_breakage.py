@@ -40,5 +40,8 @@ def test_broken_mass_share_is_the_mass_outside_each_stones_largest_piece():
     assert broken_mass_share(units, labels, r) == pytest.approx(1.0 - kept / total, rel=1e-12)
     assert broken_mass_share(units, np.array([0, 0, 1, 1, 1, 2, 2, 3]), r) == 0.0
     assert broken_mass_share(units, np.full(8, -1), r) == 1.0          # all gone
+    m = np.random.default_rng(1).random(4000)                           # whole stones: 0 exactly,
+    whole = np.repeat(np.arange(100), 40)                               # not to round-off
+    assert broken_mass_share(whole, 3 * whole + 7, m) == 0.0
     with pytest.raises(ValueError, match="no stone balls"):
         broken_mass_share(np.full(8, -1), labels, r)

@@ -94,13 +94,15 @@ def broken_mass_share(units, labels, mass):
     labels = np.asarray(labels, np.int64)
     mass = np.asarray(mass, float)
     was = units >= 0
-    total = mass[was].sum()
-    if total <= 0.0:
+    if not was.any() or mass[was].sum() <= 0.0:
         raise ValueError("no stone balls when loading began: the share is undefined")
+    n_units = int(units.max()) + 1
+    per_unit = np.bincount(units[was], weights=mass[was], minlength=n_units)
     now = was & (labels >= 0)
     u, f, m = units[now], labels[now], mass[now]
     base = max(int(labels.max()), 0) + 1
     piece, idx = np.unique(u * base + f, return_inverse=True)   # one per (unit, fragment now)
-    largest = np.zeros(int(units.max()) + 1)
+    largest = np.zeros(n_units)
     np.maximum.at(largest, piece // base, np.bincount(idx, weights=m))
-    return float(1.0 - largest.sum() / total)
+    # a whole stone's piece sums its balls in the order its unit does: 0 exactly
+    return float((per_unit - largest).sum() / per_unit.sum())
