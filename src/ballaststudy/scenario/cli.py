@@ -93,10 +93,11 @@ def case_scenario(args):
     rig, record = conditioned_rig(kind, cfg.get("rig", {}), conditions, args.mode, args.conditions, mapping)
     material = load_material_values(args.parameters) if args.parameters else {}
     model = check_stone_model(cfg, args.config, "cpu", args.stone_model, (args.parameters, material), stages=())
-    effects = [_effect(text, model, splitting_of(cfg)) for text in args.effect or ()]
+    splitting = splitting_of(cfg)
+    effects = [_effect(text, model, splitting) for text in args.effect or ()]
     return scenario(kind, [args.assembled], rig, args.cycles, material_modifiers(material) + effects,
                     conditions, args.conditions or "", cfg.get("metrics"), mapping=record, stone_model=model,
-                    splitting=splitting_of(cfg)), material
+                    splitting=splitting), material
 
 
 def _effect(text, model, splitting):
