@@ -29,9 +29,8 @@ def ratios(sim):
     """(sigma_c, (sigma_1 - sigma_3) / sigma_c) per clump now."""
     t = sim.thickness
     fmax, s, area = crushing.loads(sim)
-    sig_c = crushing.characteristic_stress(t, fmax, area)
+    sig_c, dev = (crushing.characteristic_stress(t, fmax, s, area, k) for k in (0, 1))
     with np.errstate(invalid="ignore", divide="ignore"):
-        dev = np.hypot(s[:, 0] - s[:, 3], s[:, 1] + s[:, 2]) / (area * t)
         return sig_c, dev / sig_c
 
 

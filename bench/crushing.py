@@ -3,9 +3,10 @@ fitted to each (rig/crushing.py): the rigid stones' strength calibrated against 
 stones'.
 
     NUMBA_NUM_THREADS=1 python bench/crushing.py results/bpm/box_test.nc --stones 60 \
-        [--F-str-co 3.5] [--d0 0.04] [--seed 1] [--out crushing.csv]
+        [--F-str-co 3.5] [--d0 0.04] [--seed 1] [--criterion deviator] [--out crushing.csv]
 
-The bonded stones are crushed first; their fit (sigma0, m at d0), one per stone material
+Strengths are in the stress of the splitting criterion named (dem/crushing.py CRITERIA;
+default largest_contact_force). The bonded stones are crushed first; their fit (sigma0, m at d0), one per stone material
 (Table 4.2's hard and soft joints), is the rigid stones' Weibull; the same stones, turned
 alike, are then crushed rigid and fitted again. Prints one line per stone and model, the
 fits per model and material with the 90 % interval of m, per material a two-sample KS test
@@ -20,6 +21,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from scipy import stats  # noqa: E402
 
+from ballaststudy.dem.crushing import CRITERIA  # noqa: E402
 from ballaststudy.dem.materials import MATERIAL_NAMES, STONE_MATERIALS  # noqa: E402
 from ballaststudy.rig.crushing import CrushingParams, crush, weibull_fit  # noqa: E402
 from ballaststudy.rig.library import load_library  # noqa: E402
@@ -57,12 +59,13 @@ def main(argv=None):
     ap.add_argument("--F-str-co", type=float, default=3.5)
     ap.add_argument("--d0", type=float, default=0.04)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--criterion", choices=CRITERIA, default=CRITERIA[0])
     ap.add_argument("--out")
     a = ap.parse_args(argv)
     lib = load_library(a.library)
     stones = range(min(a.stones, len(lib)))
-    params = CrushingParams(F_str_co=a.F_str_co)
-    print(f"{a.library}: {len(stones)} of {len(lib)} stones, F_str_co {a.F_str_co}, "
+    params = CrushingParams(F_str_co=a.F_str_co, criterion=a.criterion)
+    print(f"{a.library}: {len(stones)} of {len(lib)} stones, criterion {a.criterion}, F_str_co {a.F_str_co}, "
           f"platens {params.platen_speed_m_s} m/s each, seed {a.seed}")
     materials = {k: lib.stone(k).material for k in stones}
     bonded, tb = crush_all(lib, stones, "bonded", params, a.seed)
@@ -81,11 +84,12 @@ def main(argv=None):
     if a.out:
         with open(a.out, "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["model", "stone", "material", "diameter_m", "force_N", "stress_Pa", "failed", "steps"])
+            w.writerow(["model", "stone", "material", "criterion", "diameter_m", "force_N", "stress_Pa",
+                        "failed", "steps"])
             for name, out in (("bonded", bonded), ("rigid", rigid)):
                 for c in out:
-                    w.writerow([name, c.stone, MATERIAL_NAMES[materials[c.stone]], c.diameter, c.force,
-                                c.stress, int(c.failed), c.steps])
+                    w.writerow([name, c.stone, MATERIAL_NAMES[materials[c.stone]], a.criterion, c.diameter,
+                                c.force, c.stress, int(c.failed), c.steps])
 
 
 if __name__ == "__main__":

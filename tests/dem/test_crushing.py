@@ -4,7 +4,8 @@ energy; the pieces partition the pebbles on either side of a line through the ce
 mass; sibling pebbles that overlap do not push apart (a split at rest stays at rest, and
 without the rule it would not); strengths follow the configured Weibull law (KS) with the
 2D size effect; a disk between platens splits when its characteristic stress reaches its
-strength, along the loading axis; a piece below the fines size leaves with its mass logged;
+strength, along the loading axis, under either criterion; the deviator criterion sees
+confinement (a pebble pressed from two sides against four, exactly); a piece below the fines size leaves with its mass logged;
 a run that splits is the same however it is chunked, and resumes from a checkpoint
 bitwise."""
 import math
@@ -51,9 +52,9 @@ def _bodies(sim):
     return m.sum(), (m[:, None] * v).sum(axis=0), lz, ke
 
 
-def _enable(sim, clumps, sigma0=2e6, fines=0.0, every=10):
+def _enable(sim, clumps, sigma0=2e6, fines=0.0, every=10, criterion="largest_contact_force"):
     sim.enable_crushing(clumps, sigma0=sigma0, m=5.0, d0=0.04, seed=11, fines_diameter=fines,
-                        every=every)
+                        every=every, criterion=criterion)
 
 
 def test_a_split_keeps_mass_momenta_and_adds_no_kinetic_energy():
@@ -128,14 +129,20 @@ def test_the_streams_depend_on_seed_piece_and_generation_only():
     assert a not in others and len(others) == 3
 
 
-def _between_platens(sigma0=2e6, fines=0.0, every=10):
+def _between_platens(sigma0=2e6, fines=0.0, every=10, criterion="largest_contact_force"):
     sim, c = _stone(damping=0.7)
     top = sim.add_wall([(-0.05, 0.0201), (0.05, 0.0201)])
     bottom = sim.add_wall([(0.05, -0.0201), (-0.05, -0.0201)])
     sim.set_wall_velocity(top, vel=(0.0, -0.01))
     sim.set_wall_velocity(bottom, vel=(0.0, 0.01))
-    _enable(sim, [c], sigma0=sigma0, fines=fines, every=every)
+    _enable(sim, [c], sigma0=sigma0, fines=fines, every=every, criterion=criterion)
     return sim, c
+
+
+def _stress(sim, c):
+    fmax, s, area = crushing.loads(sim)
+    criterion = crushing.CRITERIA.index(sim.crushing_settings()["criterion"])
+    return crushing.characteristic_stress(1.0, fmax, s, area, criterion)[c]
 
 
 def _closed_until_split(sim, c):
@@ -145,18 +152,18 @@ def _closed_until_split(sim, c):
     while not len(sim.splits) and sim.step < 40000:
         sim.run(10)
         if not len(sim.splits):
-            fmax, _, area = crushing.loads(sim)
-            checked = max(checked, crushing.characteristic_stress(1.0, fmax, area)[c])
+            checked = max(checked, _stress(sim, c))
             assert sim.clumps.peak[c] == checked
     return checked
 
 
+@pytest.mark.parametrize("criterion", crushing.CRITERIA)
 @pytest.mark.parametrize("damage", [0.0, 0.6])
-def test_a_disk_between_platens_splits_at_its_strength_along_the_loading_axis(damage):
+def test_a_disk_between_platens_splits_at_its_strength_along_the_loading_axis(damage, criterion):
     """Undamaged, at its strength; with damage D at strength (1 - D), well below it; not
     before (checked every 10 steps: none missed) and with no overshoot; along the loading
-    axis; the pieces start undamaged."""
-    sim, c = _between_platens()
+    axis; the pieces start undamaged. Either criterion."""
+    sim, c = _between_platens(criterion=criterion)
     sim.clumps.damage[c] = damage
     strength = sim.clumps.strength[c]
     limit = strength * (1.0 - damage)
@@ -169,6 +176,38 @@ def test_a_disk_between_platens_splits_at_its_strength_along_the_loading_axis(da
     assert angle < 5.0, angle
     assert log["n_parent"][0] + log["n_child"][0] == len(_disk())
     assert sim.clumps.gen.tolist() == [1, 1] and sim.clumps.damage.tolist() == [0.0, 0.0]
+
+
+def _pebble_between_walls(sides):
+    """One pebble of radius 2 mm made a clump, pressed 10 um by two platens (``sides``:
+    and by two side walls alike), walls at rest: the forces after one step."""
+    sim = Simulation(gravity=(0.0, 0.0), domain=(-0.2, -0.2, 0.2, 0.2))
+    sim.set_contact_material(ContactMaterial(E=1e8, kappa=2.5, mu=0.5))
+    c = sim.make_clumps([sim.add_balls(0.0, 0.0, R_PEBBLE, RHO)])[0]
+    h = R_PEBBLE - 1e-5
+    walls = [sim.add_wall([(-0.01, h), (0.01, h)]), sim.add_wall([(0.01, -h), (-0.01, -h)])]
+    if sides:
+        walls += [sim.add_wall([(h, 0.01), (h, -0.01)]), sim.add_wall([(-h, -0.01), (-h, 0.01)])]
+    sim.run(1)
+    return sim, c, h, float(np.hypot(*sim.wall_force(walls[0]).sum(axis=0)))
+
+
+def test_the_deviator_sees_confinement_and_the_largest_force_does_not():
+    """A pebble pressed by two platens with force F at contact points +-h: S_yy = -2 F h, so
+    the deviator is 2 F h / (A t) and F_max / (d t) = F / (d t); confined alike on its
+    sides the deviator is 0 (to round-off) and the largest force the same."""
+    area, d = math.pi * R_PEBBLE ** 2, 2 * R_PEBBLE
+    for sides in (False, True):
+        sim, c, h, f = _pebble_between_walls(sides)
+        assert f > 0
+        fmax, s, a = crushing.loads(sim)
+        assert a[c] == pytest.approx(area, rel=1e-14)
+        largest, deviator = (crushing.characteristic_stress(1.0, fmax, s, a, k)[c] for k in (0, 1))
+        assert largest == pytest.approx(f / d, rel=1e-12)
+        if sides:
+            assert deviator <= 1e-12 * largest
+        else:
+            assert deviator == pytest.approx(2 * f * h / area, rel=1e-12)
 
 
 def test_pieces_below_the_fines_size_leave_with_their_mass_logged():

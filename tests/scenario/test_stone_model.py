@@ -136,7 +136,7 @@ def test_splitting_stones_with_fatigue_run_and_resume_bitwise_through_the_runner
     full, _ = prepared_run(tired, 0, tmp_path / "full" / "case0.nc", checkpoint_every=1)
     full.run()
     sim = full.rig.sim
-    assert sim.crushing_settings() == {"sigma0_Pa": [LAW["sigma0"]] * 2, "weibull_modulus": [LAW["m"]] * 2,
+    assert sim.crushing_settings() == {"criterion": "largest_contact_force", "sigma0_Pa": [LAW["sigma0"]] * 2, "weibull_modulus": [LAW["m"]] * 2,
                                        "d0_m": LAW["d0"], "seed": full.rig.layout.seed % 2 ** 53,
                                        "fines_diameter_m": 0.0, "every_steps": LAW["every"]}
     assert len(sim.splits) > 0 and (sim.clumps.damage > 0).any() and (sim.clumps.damage < 1).all()
@@ -185,7 +185,7 @@ def test_a_case_run_reads_the_splitting_law_from_the_config(setup, tmp_path, cap
     refused in one line, exit 2, nothing written."""
     from ballaststudy.cli import main
     asm, config, folder = setup
-    law = {"splitting": True, "strength_sigma0_Pa": [2.0e6, 3.0e5], "weibull_modulus": [4.0, 2.5],
+    law = {"splitting": True, "criterion": "deviator", "strength_sigma0_Pa": [2.0e6, 3.0e5], "weibull_modulus": [4.0, 2.5],
            "reference_diameter_m": 0.05, "fines_diameter_m": 0.004, "check_every_steps": 70}
     out = tmp_path / "case.nc"
     rigid = _config(folder, stone_model="rigid", rigid_stones=law)
@@ -195,7 +195,7 @@ def test_a_case_run_reads_the_splitting_law_from_the_config(setup, tmp_path, cap
     assert prov["params"]["effects"] == [["fatigue", {"fatigue_exponent": 10.0, "endurance_ratio": 0.3}]]
     ds = open_netcdf(out, "metrics")
     recorded = json.loads(ds.attrs["stone_splitting_json"])
-    assert recorded == {"sigma0_Pa": [2.0e6, 3.0e5], "weibull_modulus": [4.0, 2.5], "d0_m": 0.05, "seed": ds.attrs["seed"] % 2 ** 53,
+    assert recorded == {"criterion": "deviator", "sigma0_Pa": [2.0e6, 3.0e5], "weibull_modulus": [4.0, 2.5], "d0_m": 0.05, "seed": ds.attrs["seed"] % 2 ** 53,
                         "fines_diameter_m": 0.004, "every_steps": 70}
     refused = tmp_path / "refused.nc"
     capsys.readouterr()

@@ -2,13 +2,18 @@
 (a stone that meets a failure criterion is replaced by smaller pieces), on clumps of
 pebbles. The choices, argued in docs/stone-models/splitting-plan.md:
 
-- Criterion: the characteristic stress sigma_c = F_max / (d t) of a stone, F_max the
+- Criterion, one of two stresses of a stone (CRITERIA), each calibrated on the crushing
+  test (rig/crushing.py): ``largest_contact_force``, sigma_c = F_max / (d t), F_max the
   largest total force one neighbouring body (a stone, a ball, a wall segment) exerts on it,
   d = sqrt(4 A / pi) its equivalent diameter, A the pebble-sum area (the measure the
-  pebble-sum mass uses; overlaps count twice, calibrated away by the crushing test). de
+  pebble-sum mass uses; overlaps count twice, calibrated away by the crushing test) - de
   Bono and McDowell (2016): of the major principal, mean and largest-contact-force
   criteria only the last gave normal compression lines; summing the pebble contacts per
-  neighbour makes F_max the force between two stones, not between two pebbles.
+  neighbour makes F_max the force between two stones, not between two pebbles. It is blind
+  to confinement: in a bed it splits ~7x more mass than bonded stones lose
+  (docs/stone-models/README.md). ``deviator``, sigma_1 - sigma_3 of the stone's average
+  stress (1/(A t)) sum f (x) r (symmetrised; the 2D octahedral shear up to a factor): a
+  stone's other contacts lower it, as they keep a crack from opening in a bonded stone.
 - Strength: Weibull with a weakest-link size effect, survival exp(-(A/A0)(sigma/sigma0)^m),
   so a stone of diameter d has characteristic strength sigma0 (d/d0)^(-2/m) (2D; 3D
   is -3/m, geoLAMMPS fix crushing); (sigma0, m) per stone material (Table 4.2's soft
@@ -38,6 +43,7 @@ from .materials import HARD, SOFT
 from .neighbours import seg_closest
 
 _MASK64 = (1 << 64) - 1
+CRITERIA = ("largest_contact_force", "deviator")     # CRUSH_CRITERION 0, 1
 
 
 @njit(cache=True, error_model="numpy")
@@ -128,22 +134,28 @@ def _entry(a, b, nbody, gx, gy, px, py, cpos, key, fx, fy, s, m):
 
 
 @njit(cache=True, error_model="numpy")
-def characteristic_stress(thick, fmax, area):
-    """sigma_c = F_max / (d t), d = sqrt(4 A / pi) [Pa] (0 where A = 0)."""
+def characteristic_stress(thick, fmax, s, area, criterion):
+    """The stress each clump's strength is compared with [Pa] (0 where A = 0): criterion 0,
+    F_max / (d t), d = sqrt(4 A / pi); 1, the deviator sigma_1 - sigma_3 of the average
+    stress S / (A t), S symmetrised."""
     out = np.zeros(fmax.shape[0])
     for c in range(fmax.shape[0]):
-        if area[c] > 0.0:
+        if area[c] <= 0.0:
+            continue
+        if criterion == 1:
+            out[c] = math.hypot(s[c, 0] - s[c, 3], s[c, 1] + s[c, 2]) / (area[c] * thick)
+        else:
             out[c] = fmax[c] / (math.sqrt(4.0 * area[c] / math.pi) * thick)
     return out
 
 
 @njit(cache=True, error_model="numpy")
 def overloaded(prm, kin, balls, clumps, pr, wp, seg):
-    """True if a free clump's characteristic stress reached its strength, lowered by its
+    """True if a free clump's criterion's stress reached its strength, lowered by its
     damage (engine.run_steps asks at steps that are multiples of CRUSH_EVERY); each
     clump's ``peak`` keeps the largest stress so checked (what damage accumulates from)."""
-    fmax, _, area = stone_loads(prm[P.THICK], kin, balls.clump, balls.alive, pr, wp, seg, clumps.pos)
-    sig = characteristic_stress(prm[P.THICK], fmax, area)
+    fmax, s, area = stone_loads(prm[P.THICK], kin, balls.clump, balls.alive, pr, wp, seg, clumps.pos)
+    sig = characteristic_stress(prm[P.THICK], fmax, s, area, int(prm[P.CRUSH_CRITERION]))
     hit = False
     for c in range(sig.shape[0]):
         if not clumps.held[c]:
@@ -202,15 +214,19 @@ def _per_material(value, name):
     return pair
 
 
-def enable(sim, clumps, sigma0, m, d0, seed, fines_diameter, every):
+def enable(sim, clumps, sigma0, m, d0, seed, fines_diameter, every, criterion=CRITERIA[0]):
     """Make ``clumps`` breakable: Weibull (sigma0 [Pa] at diameter d0 [m], modulus m; each
-    one number or a (hard, soft) pair, by stone material), strengths drawn for generation
-    0, fines below ``fines_diameter`` [m], checked every ``every`` steps."""
+    one number or a (hard, soft) pair, by stone material) of the ``criterion``'s stress
+    (one of CRITERIA), strengths drawn for generation 0, fines below ``fines_diameter``
+    [m], checked every ``every`` steps."""
     sigma0, m = _per_material(sigma0, "sigma0"), _per_material(m, "m")
     if not (d0 > 0 and fines_diameter >= 0 and int(every) >= 1 and 0 <= int(seed) < 2 ** 53):
         raise ValueError("crushing: need d0 > 0, fines_diameter >= 0, every >= 1 "
                          "and 0 <= seed < 2^53 (kept exactly in the float parameters)")
+    if criterion not in CRITERIA:
+        raise ValueError(f"crushing: criterion {criterion!r} is not one of {', '.join(CRITERIA)}")
     p = sim.prm
+    p[P.CRUSH_CRITERION] = CRITERIA.index(criterion)
     for material, (s0, mm) in _LAW.items():
         p[s0], p[mm] = sigma0[material], m[material]
     p[P.CRUSH_EVERY], p[P.CRUSH_D0], p[P.CRUSH_SEED], p[P.CRUSH_FINES] = int(every), d0, int(seed), fines_diameter
@@ -221,12 +237,14 @@ def enable(sim, clumps, sigma0, m, d0, seed, fines_diameter, every):
 
 
 def settings(sim):
-    """The splitting law a Simulation runs ({sigma0_Pa, weibull_modulus (each [hard,
-    soft]), d0_m, seed, fines_diameter_m, every_steps}; None when its stones do not split)."""
+    """The splitting law a Simulation runs ({criterion, sigma0_Pa, weibull_modulus (each
+    [hard, soft]), d0_m, seed, fines_diameter_m, every_steps}; None when its stones do not
+    split)."""
     p = sim.prm
     if not p[P.CRUSH_EVERY]:
         return None
-    return dict(sigma0_Pa=[float(p[s0]) for s0, _ in _LAW.values()],
+    return dict(criterion=CRITERIA[int(p[P.CRUSH_CRITERION])],
+                sigma0_Pa=[float(p[s0]) for s0, _ in _LAW.values()],
                 weibull_modulus=[float(p[m]) for _, m in _LAW.values()],
                 d0_m=float(p[P.CRUSH_D0]), seed=int(p[P.CRUSH_SEED]),
                 fines_diameter_m=float(p[P.CRUSH_FINES]), every_steps=int(p[P.CRUSH_EVERY]))
@@ -282,10 +300,10 @@ def partition(sim, c, u):
 
 
 def split_overloaded(sim):
-    """Split every free clump whose characteristic stress reached its strength (called by
+    """Split every free clump whose criterion's stress reached its strength (called by
     Simulation.run when the kernel says STONES_OVERLOADED). Returns how many split."""
     fmax, s, area = loads(sim)
-    sig = characteristic_stress(sim.prm[P.THICK], fmax, area)
+    sig = characteristic_stress(sim.prm[P.THICK], fmax, s, area, int(sim.prm[P.CRUSH_CRITERION]))
     cl = sim.clumps
     hit = np.flatnonzero((cl.held == 0) & (sig >= cl.strength * (1.0 - cl.damage)))
     pairs = []

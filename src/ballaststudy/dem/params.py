@@ -33,7 +33,8 @@ CRUSH_SEED = 30   # seed of the strength streams [-]
 CRUSH_FINES = 31  # pieces of an equivalent diameter below this are fines (removed) [m]
 CRUSH_SIGMA0_SOFT = 32  # the same two for stones of material 1 (soft: Table 4.2's weaker
 CRUSH_M_SOFT = 33       # joints make weaker stones, a law of their own)
-NPRM = 34
+CRUSH_CRITERION = 34    # the stress compared with the strength: 0 F_max / (d t), 1 deviator
+NPRM = 35
 
 # energy accumulator slots (``energy_acc`` array)
 E_DASHPOT = 0     # work dissipated by contact dashpots [J]

@@ -395,12 +395,13 @@ class Simulation:
         self._touch()
         return int(gone.sum())
 
-    def enable_crushing(self, clumps, sigma0, m, d0, seed, fines_diameter=0.0, every=100):
-        """Free clumps ``clumps`` split when their characteristic stress reaches a Weibull
-        strength (sigma0 [Pa] at equivalent diameter d0 [m], modulus m; crushing.py),
-        checked every ``every`` steps; pieces below ``fines_diameter`` [m] are removed as
-        fines. The record: ``split_log``."""
-        crushing.enable(self, clumps, sigma0, m, d0, seed, fines_diameter, every)
+    def enable_crushing(self, clumps, sigma0, m, d0, seed, fines_diameter=0.0, every=100,
+                        criterion="largest_contact_force"):
+        """Free clumps ``clumps`` split when their ``criterion``'s stress (crushing.CRITERIA)
+        reaches a Weibull strength (sigma0 [Pa] at equivalent diameter d0 [m], modulus m;
+        crushing.py), checked every ``every`` steps; pieces below ``fines_diameter`` [m]
+        are removed as fines. The record: ``split_log``."""
+        crushing.enable(self, clumps, sigma0, m, d0, seed, fines_diameter, every, criterion)
 
     def crushing_settings(self):
         """The splitting law enabled (crushing.settings), None if stones do not split."""

@@ -1,18 +1,21 @@
 """Single-stone crushing between two platens: the strength of a library's stones under
 either stone model, and the Weibull law fitted to it (the rigid stones' strength
-calibrated against the bonded stones', not guessed).
+calibrated against the bonded stones', not guessed), in the stress of either splitting
+criterion (dem/crushing.py CRITERIA).
 
 A stone of the library, turned by a seeded random angle, lies between two flat platens
 that close at ``platen_speed_m_s`` each, gravity off, local damping on (quasi-static: the
-closing takes ~10^3 times a wave's transit through the stone). Its characteristic stress is
-sigma = F / (d t): F the platen force (its resultant, friction included: the force the
-criterion of dem/crushing.py sums per neighbouring body), d = sqrt(4 A / pi) with A the pebble-sum area (the
-measure dem/crushing.py draws strengths for), t the thickness. It has failed when the
+closing takes ~10^3 times a wave's transit through the stone). Its stress is the
+criterion's, from the platens' forces on the whole stone exactly as the splitting kernel
+computes it for a clump (crushing.stone_loads / characteristic_stress): F / (d t) with F
+the larger platen resultant (friction included), d = sqrt(4 A / pi) with A the pebble-sum
+area, t the thickness; or the deviator of (1/(A t)) sum f (x) r over the platen contacts.
+Bonded stones' inner forces (contacts, flat joints) do not enter: one body. It has failed when the
 largest piece holds less than ``intact_share`` of the stone's mass (one rule for both
 models: a bonded stone cracks element by element and chips first, a rigid one splits at
 once; a rule on the platen force's drop was tried and fired on stones that rock on their
-first contact); sigma_f is the peak force's stress up to then (the forces read are those
-of the last step, computed before a split). A stone closed to
+first contact); sigma_f is the peak stress up to then (the forces read are those of the
+last step, computed before a split). A stone closed to
 ``max_strain`` without failing is right-censored.
 
 The fit: survival exp(-(d/d0)^2 (sigma/sigma0)^m) (dem/crushing.py's law), by maximum
@@ -25,6 +28,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..dem import ContactLaw, Simulation
+from ..dem.crushing import CRITERIA, characteristic_stress, stone_loads
 from ..dem.materials import F_STR_CO, STONE_MATERIALS
 from ..stones import stone_model
 
@@ -40,6 +44,7 @@ class CrushingParams:
                                       # after each stress check: the peak is the split's force)
     F_str_co: float = F_STR_CO        # flat joints: their strength factor (Table 4.2: 3.5)
     check_every_steps: int = 10       # rigid: stresses checked every this many steps
+    criterion: str = CRITERIA[0]      # the stress measured (and split on; dem/crushing.py)
 
 
 @dataclass
@@ -47,7 +52,7 @@ class Crush:
     stone: int          # library index
     diameter: float     # equivalent diameter d (pebble-sum area) [m]
     force: float        # peak platen force up to failure [N]
-    stress: float       # sigma_f = force / (d t) [Pa]
+    stress: float       # sigma_f: the criterion's peak stress up to failure [Pa]
     failed: bool        # False: censored at max_strain
     steps: int
     drawn: float = float("nan")   # rigid: the strength the stone drew (dem/crushing.py) [Pa]
@@ -76,7 +81,8 @@ def _platen_sim(lib, k, angle, params):
 
 def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
     """Crush stone ``k`` of ``lib`` under the stone model named ``model`` (``splitting``:
-    the Weibull of stones that split, dict(sigma0, m, d0)). Returns a Crush."""
+    the Weibull of stones that split, dict(sigma0, m, d0), on params.criterion's stress).
+    Returns a Crush."""
     rng = np.random.default_rng([int(seed), int(k)])
     angle = rng.uniform(0.0, 2.0 * np.pi)
     stream_seed = int(rng.integers(2 ** 53))    # each stone its own strength stream
@@ -84,22 +90,23 @@ def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
     stones = stone_model(model)
     if stones.has_flat_joints:
         sim.scale_bond_strength(params.F_str_co / F_STR_CO)
-    split = None if splitting is None else dict(seed=stream_seed, fines_diameter=0.0,
+    split = None if splitting is None else dict(seed=stream_seed, fines_diameter=0.0, criterion=params.criterion,
                                                 every=params.check_every_steps, **splitting)
     stones.make(sim, ids, split)
     d = 2.0 * float(np.sqrt((sim.balls.rad[ids] ** 2).sum()))
     mass = sim.balls.mass[ids]
-    peak, closed, failed = 0.0, 0.0, False
+    peak, force, closed, failed = 0.0, 0.0, 0.0, False
     chunk = params.check_every_steps if split else params.chunk_steps
     while closed < params.max_strain * height:
         sim.run(chunk)
         b = sim.balls
         sim.delete_balls(np.flatnonzero((b.alive == 1) & (np.hypot(*b.pos.T) > span)))   # chips thrown off
         closed = 2.0 * params.platen_speed_m_s * sim.time
-        f = float(np.hypot(*sim.wall_force(top).sum(axis=0)))   # friction included
         labels = stones.fragments(sim, len(ids))
         largest = np.bincount(labels[labels >= 0], weights=mass[labels >= 0]).max(initial=0.0)
-        peak = max(peak, f)      # the forces of the chunk's last step: before any split
+        # the forces of the chunk's last step: before any split
+        peak = max(peak, stone_stress(sim, ids, params.criterion))
+        force = max(force, float(np.hypot(*sim.wall_force(top).sum(axis=0))))
         if largest < params.intact_share * mass.sum():
             failed = True
             break
@@ -108,7 +115,21 @@ def crush(lib, k, model, params=CrushingParams(), seed=0, splitting=None):
         drawn = float(sim.splits.strength[0])
     elif split:
         drawn = float(sim.clumps.strength[0])
-    return Crush(int(k), d, peak, peak / (d * lib.thickness), failed, sim.step, drawn)
+    return Crush(int(k), d, force, peak, failed, sim.step, drawn)
+
+
+def stone_stress(sim, ids, criterion):
+    """The ``criterion``'s stress of the stone made of balls ``ids`` (all of them one body,
+    whatever its clumps or bonds) from the forces of the last step [Pa]."""
+    b = sim.balls
+    live = ids[b.alive[ids] == 1]
+    body = np.full(len(b.rad), -1, np.int32)
+    body[live] = 0
+    centre = (b.mass[live, None] * b.pos[live]).sum(axis=0) / b.mass[live].sum()
+    kin = np.column_stack([b.pos, b.vel, b.omega, b.rad, b.minv, b.mat])
+    fmax, s, area = stone_loads(sim.thickness, kin, body, b.alive, sim.pairs.kernel(),
+                                sim.wpairs.kernel(), sim.walls.seg, centre[None, :])
+    return float(characteristic_stress(sim.thickness, fmax, s, area, CRITERIA.index(criterion))[0])
 
 
 def weibull_fit(stress, diameter, failed, d0):

@@ -163,7 +163,8 @@ def splitting_of(cfg):
     rs = cfg.get("rigid_stones") or {}
     if not rs.get("splitting"):
         return None
-    return dict(sigma0=[float(v) for v in rs["strength_sigma0_Pa"]], m=[float(v) for v in rs["weibull_modulus"]],
+    return dict(criterion=rs["criterion"], sigma0=[float(v) for v in rs["strength_sigma0_Pa"]],
+                m=[float(v) for v in rs["weibull_modulus"]],
                 d0=float(rs["reference_diameter_m"]), fines_diameter=float(rs["fines_diameter_m"]),
                 every=int(rs["check_every_steps"]))
 
