@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-BEHAVIOURS = (("settlement", 1e3, "mm"), ("breakage_rate", 100.0, "%"),
+BEHAVIOURS = (("settlement", 1e3, "mm"), ("broken_mass_share", 100.0, "%"), ("breakage_rate", 100.0, "%"),
               ("breakages_per_cycle", 1.0, "1"), ("void_ratio", 1.0, "1"),
               ("fpa", 1.0, "deg"), ("ghost_particles", 1.0, "1"),
               ("mean_coordination", 1.0, "1"))

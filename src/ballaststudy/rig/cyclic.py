@@ -62,7 +62,7 @@ class CyclicRun:
         self.checkpoint = checkpoint
         self.checkpoint_every = int(checkpoint_every)
         self.max_cycle_steps = max_cycle_steps
-        self.s = self.State(log0=rig.sim.n_breakages, metrics_cfg=dict(metrics or {}),
+        self.s = self.State(log0=rig.stones.n_breakages(rig.sim), metrics_cfg=dict(metrics or {}),
                             n_bonds0=rig.stones.breakable_units(rig.sim))
         self.samples = {k: [] for k in ("step", "cycle", *self.CHANNELS)}
         self.cyc = {k: [] for k in self.CYCLE_FIELDS}

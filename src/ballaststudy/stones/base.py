@@ -42,6 +42,10 @@ class StoneModel(ABC):
     def breakages(self, sim):
         """The breakage record since the start (Simulation.breakages' columns)."""
 
+    def n_breakages(self, sim):
+        """Rows of ``breakages`` so far: where a run's own records begin."""
+        return int(len(self.breakages(sim)["step"]))
+
     def fragments(self, sim, n_balls):
         """Fragment label of balls 0..n_balls-1 (-1: dead), numbered by lowest ball id."""
         i, j, intact = self.topology(sim)
