@@ -26,14 +26,25 @@ def test_cell_list_matches_brute_force_and_reports_capacity():
     clump[10:20] = 0
     oi = np.zeros(50000, np.int32)
     oj = oi.copy()
-    c = build_pairs(pos, rad, alive, clump, 0.002, -0.01, -0.01, 0.31, 0.31, oi, oj)
+    none = np.zeros(n, np.uint8)
+    c = build_pairs(pos, rad, alive, none, clump, 0.002, -0.01, -0.01, 0.31, 0.31, oi, oj)
     ref = brute_pairs(pos, rad, alive, clump, 0.002)
     got = set(zip(oi[:c].tolist(), oj[:c].tolist()))
     assert c == len(ref) and got == ref, f"{c} pairs found, {len(ref)} expected"
     assert np.all(np.diff(oi[:c]) >= 0), "rows not grouped by ascending i"
     small = np.zeros(10, np.int32)
-    assert build_pairs(pos, rad, alive, clump, 0.002, -0.01, -0.01, 0.31, 0.31,
+    assert build_pairs(pos, rad, alive, none, clump, 0.002, -0.01, -0.01, 0.31, 0.31,
                        small, small.copy()) == -c
+    # buried balls (the largest among them: the cells keep their size) are left out, and
+    # the pairs left keep their order
+    buried = np.zeros(n, np.uint8)
+    buried[30:60] = 1
+    buried[np.argmax(rad)] = 1
+    bi, bj = np.zeros(50000, np.int32), np.zeros(50000, np.int32)
+    cb = build_pairs(pos, rad, alive, buried, clump, 0.002, -0.01, -0.01, 0.31, 0.31, bi, bj)
+    keep = (buried[oi[:c]] == 0) & (buried[oj[:c]] == 0)
+    assert cb == keep.sum() < c
+    assert np.array_equal(bi[:cb], oi[:c][keep]) and np.array_equal(bj[:cb], oj[:c][keep])
 
 
 def test_history_follows_pairs_across_rebuild():
@@ -60,7 +71,7 @@ def test_wall_pairs_brute_force():
     oi = np.zeros(2000, np.int32)
     os_ = oi.copy()
     clear = np.zeros(400)
-    c = build_wall_pairs(pos, rad, np.ones(400, np.uint8), seg, 0.003, oi, os_, clear)
+    c = build_wall_pairs(pos, rad, np.ones(400, np.uint8), np.zeros(400, np.uint8), seg, 0.003, oi, os_, clear)
     ref = set()
     gap = np.full(400, np.inf)
     for i in range(400):
@@ -75,6 +86,10 @@ def test_wall_pairs_brute_force():
     assert set(zip(oi[:c].tolist(), os_[:c].tolist())) == ref
     # clear: a lower bound of the gap to every unlisted segment, never below the skin
     assert np.all(clear <= gap + 1e-15) and np.all(clear >= 0.003 - 1e-15)
+    buried = np.zeros(400, np.uint8)
+    buried[::3] = 1
+    cb = build_wall_pairs(pos, rad, np.ones(400, np.uint8), buried, seg, 0.003, oi, os_, clear)
+    assert set(zip(oi[:cb].tolist(), os_[:cb].tolist())) == {(i, s) for i, s in ref if not buried[i]}
 
 
 def test_strip_integrals():

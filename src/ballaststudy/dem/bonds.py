@@ -366,7 +366,7 @@ def find_bond_candidates(pos, rad, stone, alive, gap_factor):
     while True:
         oi = np.zeros(cap, np.int32)
         oj = np.zeros(cap, np.int32)
-        cnt = build_pairs(pos, rad, alive, np.full(n, -1, np.int32), skin,
+        cnt = build_pairs(pos, rad, alive, np.zeros(n, np.uint8), np.full(n, -1, np.int32), skin,
                           lo[0], lo[1], hi[0], hi[1], oi, oj)
         if cnt >= 0:
             break

@@ -52,6 +52,7 @@ def save_state(path, sim):
 def load_state(path, sim):
     with np.load(path) as z:
         d = {k: z[k] for k in z.files}
+    d.setdefault("b_buried", np.zeros(len(d["b_rad"]), np.uint8))    # written before burial
     meta = json.loads(str(d["meta"]))
     if meta.get("format") != FORMAT:
         raise ValueError(f"{path}: checkpoint format {meta.get('format')} is not {FORMAT} "

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 from numba import njit
+from scipy import ndimage
 
 from . import params as P
 from .integrate import in_domain
@@ -31,6 +32,44 @@ def mass_properties(x, y, r, rho, thick):
     density rho."""
     m = rho * np.pi * r ** 2 * thick
     return pebble_sums(m, x, y, 0.5 * m * r ** 2)
+
+
+def buried(x, y, r, probe):
+    """Which pebbles (centres x, y, radii r) of one clump no disk of radius ``probe`` can
+    touch from outside the clump: a probe's centre must keep r_j + probe from every
+    pebble's, and those it can reach from far away (the exterior) may touch a pebble i
+    only if one is within r_i + probe of it. On a raster of side h = probe / 4, made to
+    err towards "reachable": a cell is blocked only within r_j + probe - h (a feasible
+    point is within h / sqrt 2 of its cell's centre), cells connect through corners, and
+    a pebble is reachable from cells within r_i + probe + h. A wall, a straight line,
+    reaches a pebble only through the clump's outline, so only by overlapping the
+    pebbles there by about a pebble: never at contact overlaps. Returns a bool array."""
+    x, y, r = (np.asarray(a, float) for a in (x, y, r))
+    h = probe / 4.0
+    pad = r.max() + probe + 3 * h
+    x0, y0 = x.min() - pad, y.min() - pad
+    nx = int(np.ceil((x.max() + pad - x0) / h)) + 1
+    ny = int(np.ceil((y.max() + pad - y0) / h)) + 1
+    gx, gy = x0 + h * np.arange(nx), y0 + h * np.arange(ny)
+    blocked = np.zeros((nx, ny), bool)
+    for xi, yi, ri in zip(x, y, r):
+        reach = ri + probe - h
+        a, b = _window(gx, xi, reach), _window(gy, yi, reach)
+        blocked[a, b] |= ((gx[a, None] - xi) ** 2 + (gy[None, b] - yi) ** 2) < reach * reach
+    labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3)))
+    outside = labels == labels[0, 0]           # the raster's corner is far from every pebble
+    out = np.ones(len(x), bool)
+    for k, (xi, yi, ri) in enumerate(zip(x, y, r)):
+        reach = ri + probe + h
+        a, b = _window(gx, xi, reach), _window(gy, yi, reach)
+        near = ((gx[a, None] - xi) ** 2 + (gy[None, b] - yi) ** 2) <= reach * reach
+        out[k] = not (near & outside[a, b]).any()
+    return out
+
+
+def _window(g, c, reach):
+    """The slice of the grid ``g`` within ``reach`` of ``c``."""
+    return slice(max(int(np.searchsorted(g, c - reach)), 0), int(np.searchsorted(g, c + reach, side="right")))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -352,7 +352,7 @@ def split_clump(sim, c, other):
         sim._follow_clumps(peb)
         if equivalent_diameter(np.pi * (b.rad[peb] ** 2).sum()) < sim.prm[P.CRUSH_FINES]:
             _to_fines(sim, cid, peb)
-    sim._touch()
+    sim.bury([c, child])        # the new faces' pebbles can be touched now
     return child
 
 

@@ -96,7 +96,12 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
             jointed = True
             break
     has_clumps = clumps.pos.shape[0] > 0
-    pebbles = np.nonzero(balls.clump >= 0)[0]     # a clump's balls, ascending
+    # a clump's balls, ascending: all of them, and those outside bodies can reach (the
+    # buried ones are placed only where the chunk may end or a guard looks)
+    every_pebble = np.nonzero(balls.clump >= 0)[0]
+    pebbles = every_pebble
+    if (balls.buried != 0).any():
+        pebbles = np.nonzero((balls.clump >= 0) & (balls.buried == 0))[0]
     controlled = ctl.cfg[EVERY] > 0
     crush_every = int(prm[P.CRUSH_EVERY]) if has_clumps else 0
     if controlled and ctl.cfg[PENDING] > 0:     # velocities an event left pending
@@ -140,7 +145,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
             if (pebbles_astray or suspect or k == nsteps - 1
                     or (crush_every > 0 and cnt[0] % crush_every == 0)
                     or (controlled and ctl.cfg[COUNT] + 1 >= ctl.cfg[EVERY])):
-                suspect |= place_pebbles(prm, kin, balls, clumps, pebbles)
+                suspect |= place_pebbles(prm, kin, balls, clumps, every_pebble)
         st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
         # a controller's event at the same step wins the status; Simulation._run_kernel

@@ -13,10 +13,11 @@ from . import params as P
 
 
 @njit(cache=True, error_model="numpy")
-def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out_j):
+def build_pairs(pos, rad, alive, buried, clump, skin, xmin, ymin, xmax, ymax, out_i, out_j):
     """Fill out_i/out_j with pairs i < j closer than r_i + r_j + skin, grouped by i
-    (ascending). Pebbles of one clump are skipped. Returns the count, or -needed if over
-    capacity.
+    (ascending). Pebbles of one clump are skipped, buried ones too (the cells are sized
+    over every live ball all the same: the order of the pairs left does not change).
+    Returns the count, or -needed if over capacity.
 
     Cells of side >= 2 r_max + skin; a half stencil (own cell + 4 neighbours) visits each
     pair once from cell-ordered copies of the coordinates (cache friendly); the pairs are
@@ -34,7 +35,7 @@ def build_pairs(pos, rad, alive, clump, skin, xmin, ymin, xmax, ymax, out_i, out
     start = np.zeros(ncx * ncy + 1, np.int64)
     cell = np.empty(n, np.int64)
     for i in range(n):
-        if alive[i]:
+        if alive[i] and not buried[i]:
             cx = min(max(int((pos[i, 0] - xmin) / csx), 0), ncx - 1)
             cy = min(max(int((pos[i, 1] - ymin) / csy), 0), ncy - 1)
             cell[i] = cy * ncx + cx
@@ -129,8 +130,9 @@ def seg_closest(px, py, x0, y0, x1, y1):
 
 
 @njit(cache=True, error_model="numpy")
-def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s, clear):
-    """Ball-segment pairs closer than r + skin, sorted by (ball, segment).
+def build_wall_pairs(pos, rad, alive, buried, seg, skin, out_i, out_s, clear):
+    """Ball-segment pairs closer than r + skin, sorted by (ball, segment); buried pebbles
+    have none.
     clear[i] = a lower bound of the gap between ball i and every segment NOT listed with
     it (>= skin): ball i cannot touch a new segment before moving clear[i] minus the wall
     travel. Returns the count or -needed. O(N * segments): segments are few in a rig."""
@@ -152,7 +154,7 @@ def build_wall_pairs(pos, rad, alive, seg, skin, out_i, out_s, clear):
     cnt = 0
     for i in range(pos.shape[0]):
         clear[i] = 1.0e30
-        if not alive[i]:
+        if not alive[i] or buried[i]:
             continue
         px = pos[i, 0]
         py = pos[i, 1]
@@ -253,14 +255,14 @@ def rebuild(prm, balls, pr, wp, bonds, seg):
     n_old = pr.n[0]
     new_i = np.empty(pr.i.shape[0], np.int32)
     new_j = np.empty(pr.i.shape[0], np.int32)
-    cnt = build_pairs(pos, balls.rad, balls.alive, balls.clump, skin, prm[P.XMIN],
+    cnt = build_pairs(pos, balls.rad, balls.alive, balls.buried, balls.clump, skin, prm[P.XMIN],
                       prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], new_i, new_j)
     if cnt < 0:
         return 1, -cnt
     wn_old = wp.n[0]
     nw_i = np.empty(wp.i.shape[0], np.int32)
     nw_s = np.empty(wp.i.shape[0], np.int32)
-    wcnt = build_wall_pairs(pos, balls.rad, balls.alive, seg, skin, nw_i, nw_s, balls.clear)
+    wcnt = build_wall_pairs(pos, balls.rad, balls.alive, balls.buried, seg, skin, nw_i, nw_s, balls.clear)
     if wcnt < 0:
         return 2, -wcnt
     cnt = _drop_flat_jointed(new_i, new_j, cnt, bonds, pr.bond)   # match_rows reads no bond

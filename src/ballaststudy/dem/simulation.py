@@ -18,7 +18,7 @@ from . import crushing, output
 from . import params as P
 from .bonds import find_bond_candidates
 from .checkpoint import load_state, save_state
-from .clumps import mass_properties, pebble_sums
+from .clumps import buried, mass_properties, pebble_sums
 from .control import Control
 from .bound import clump_stiffness, springs, stepper, timestep
 from .engine import rebuild_lists
@@ -269,6 +269,25 @@ class Simulation:
         bd.active[inner] = 0      # kept in the arrays: which balls were joined
         self._touch()
         return ids
+
+    def bury(self, clumps):
+        """Mark the pebbles of ``clumps`` that no body of half the smallest live ball's
+        radius can touch from outside their clump (clumps.buried; a body overlapping the
+        pebbles of the outline by up to half its radius is covered too) and clear the mark
+        of the others: buried pebbles have no contacts to look for, so the kernel skips
+        them in its lists and places them only when the state is read. Their clump's mass
+        and inertia stay those of every pebble. Returns how many are buried."""
+        b = self.balls
+        live = b.alive == 1
+        probe = 0.5 * float(b.rad[live].min())
+        for c in clumps:
+            peb = np.flatnonzero((b.clump == c) & live)
+            b.buried[peb] = buried(b.pos[peb, 0], b.pos[peb, 1], b.rad[peb], probe) if len(peb) > 1 else 0
+            hid = peb[b.buried[peb] == 1]
+            b.force[hid] = 0.0
+            b.moment[hid] = 0.0
+        self._touch()
+        return int(b.buried[np.isin(b.clump, clumps)].sum())
 
     def set_clump_velocity(self, cid, vel=None, omega=None, held=None):
         if vel is not None:

@@ -55,7 +55,8 @@ def _z(*shape, dtype=np.float64):
 @dataclass
 class Balls(_Arrays):
     """Disks. ``fix`` bitmask: 1 = x velocity held, 2 = y velocity held, 4 = spin held.
-    ``clump`` = clump id or -1; ``offset`` = pebble position in its clump frame."""
+    ``clump`` = clump id or -1; ``offset`` = pebble position in its clump frame;
+    ``buried`` pebbles are left out of contact detection and of the per-step placement."""
     pos: np.ndarray = _z(0, 2)
     vel: np.ndarray = _z(0, 2)
     omega: np.ndarray = _z(0)
@@ -76,6 +77,8 @@ class Balls(_Arrays):
     clear: np.ndarray = _z(0)         # gap to the nearest unlisted wall segment at that build
     fext: np.ndarray = _z(0, 2)       # external force set by the caller (a load) [N]
     damp: np.ndarray = _z(0)          # PFC local damping coefficient alpha [-]
+    buried: np.ndarray = _z(0, dtype=np.uint8)   # 1: a pebble no outside body can reach
+                                      # (clumps.buried): no contacts, placed only when read
 
     def __len__(self):
         return self.pos.shape[0]

@@ -27,6 +27,7 @@ class RigidStones(StoneModel):
         order = np.argsort(f, kind="stable")
         cuts = np.flatnonzero(np.diff(f[order])) + 1
         clumps = sim.make_clumps(np.split(ids[order], cuts))
+        sim.bury(clumps)
         if splitting:
             sim.enable_crushing(clumps, **splitting)
         return clumps
