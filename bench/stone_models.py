@@ -93,6 +93,8 @@ def main(argv=None):
     ap.add_argument("--warm", type=int, default=1)
     ap.add_argument("--cycles", type=int, default=10)
     ap.add_argument("--quick", action="store_true", help="1 warm + 3 timed cycles a row")
+    ap.add_argument("--models", nargs="+", choices=STONE_MODELS, default=list(STONE_MODELS),
+                    help="the rows to run (speedup only with both)")
     ap.add_argument("--first-loading-inertial-number", type=float, default=1e-3,
                     help="biaxial: cycle 0's first loading (untimed; the config's 1.5e-5 "
                     "takes ~16 M bonded steps on a full specimen); 0: the config's")
@@ -108,12 +110,14 @@ def main(argv=None):
         label, path, mode = parse_spec(spec)
         first = a.first_loading_inertial_number or None
         rows = {m: measure(path, m, cfg, mode, warm, cycles, first, a.deviator_max_kPa)
-                for m in STONE_MODELS}
+                for m in a.models}
         for m, r in rows.items():
             print(f"  {label} {m:6s}: {r['core_s']:.3f} core-s/cycle ({r['cycles_timed']} timed), "
                   f"{r['steps']:.0f} steps/cycle, dt {r['dt']:.3g} s [{r['limit']}], inertia added "
                   f"{r['added']:.3f}, bodies {r['bodies']}, contacts {r['contacts']}"
                   + (f", FAILED: {r['failure']}" if r["failure"] else ""))
+        if len(rows) < 2:
+            continue
         bonded, rigid = rows["bonded"], rows["rigid"]
         print(f"{label}{'@' + mode if mode else ''}: bonded_min_per_1000={bonded['core_s'] * 1000 / 60:.2f} "
               f"rigid_min_per_1000={rigid['core_s'] * 1000 / 60:.2f} "

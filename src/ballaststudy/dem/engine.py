@@ -82,11 +82,13 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
     pack_kinematics(balls, kin)
     # one accumulator row (fx, fy, mz) per ball: a single cache line per scattered update;
     # the public force/moment arrays are written back when the chunk ends
+    # (a dead ball of no clump gets 0, and nothing adds to its row after)
     fa = np.zeros((n, 4))
     for i in range(n):
-        fa[i, 0] = balls.force[i, 0]
-        fa[i, 1] = balls.force[i, 1]
-        fa[i, 2] = balls.moment[i]
+        if balls.alive[i] or balls.clump[i] >= 0:
+            fa[i, 0] = balls.force[i, 0]
+            fa[i, 1] = balls.force[i, 1]
+            fa[i, 2] = balls.moment[i]
     bond_work = bond_scratch(bonds.i.shape[0])
     # joints only break within a chunk: none active now (rigid stones keep theirs as a
     # record, inactive), none all chunk
@@ -98,10 +100,14 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
     has_clumps = clumps.pos.shape[0] > 0
     # a clump's balls, ascending: all of them, and those outside bodies can reach (the
     # buried ones are placed only where the chunk may end or a guard looks)
-    every_pebble = np.nonzero(balls.clump >= 0)[0]
+    live = balls.alive != 0
+    every_pebble = np.nonzero((balls.clump >= 0) & live)[0]
     pebbles = every_pebble
     if (balls.buried != 0).any():
-        pebbles = np.nonzero((balls.clump >= 0) & (balls.buried == 0))[0]
+        pebbles = np.nonzero((balls.clump >= 0) & live & (balls.buried == 0))[0]
+    # the live balls of no clump: the only ones the halves of the step integrate (an
+    # assembly's cut leaves dead slots, a rigid specimen has none free)
+    free = np.nonzero((balls.clump < 0) & live)[0]
     controlled = ctl.cfg[EVERY] > 0
     crush_every = int(prm[P.CRUSH_EVERY]) if has_clumps else 0
     if controlled and ctl.cfg[PENDING] > 0:     # velocities an event left pending
@@ -110,7 +116,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         dt = prm[P.DT]
         dt_next = dt
         prm[P.WALL_TRAVEL] += move_walls(walls.seg, walls.vel, walls.omega, walls.centre, dt)
-        d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps)
+        d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps, free)
         pebbles_astray = False
         if has_clumps:
             pebbles_astray = place_pebbles(prm, kin, balls, clumps, pebbles)
@@ -135,7 +141,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         if jointed:
             bond_forces(run, kin, balls, fa, bonds, log, bond_work)
         wall_forces(law, run, kin, fa, walls, wp)
-        suspect = second_half(prm, kin, fa, balls, run.eacc)
+        suspect = second_half(prm, kin, fa, balls, run.eacc, free)
         if has_clumps:
             gather_clumps(prm[P.GX], prm[P.GY], kin, fa, balls, clumps, pebbles)
             run.eacc[P.E_LOCAL] += clumps_damp_kick(clumps, 0.5 * dt, dt)

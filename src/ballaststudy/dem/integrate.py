@@ -100,11 +100,11 @@ def in_domain(kin, i, x0, y0, x1, y1, vmax2):
 
 
 @njit(**NO_NRT)
-def first_half(prm, kin, fa, balls, clumps):
-    """One pass per free ball over its packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m,
-    material) and force row ``fa`` = (fx, fy, mz): half kick, drift, the displacement since
-    the last neighbour build, force reset to weight + external load. Then half kick + drift
-    of clumps.
+def first_half(prm, kin, fa, balls, clumps, free):
+    """One pass per free ball (``free``: the live balls of no clump, ascending) over its
+    packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m, material) and force row ``fa`` =
+    (fx, fy, mz): half kick, drift, the displacement since the last neighbour build, force
+    reset to weight + external load. Then half kick + drift of clumps.
 
     Verlet-list validity (exact, by the triangle inequality): a pair not listed had a
     gap > skin, and |dx_i - dx_j| <= |dx_i - c| + |dx_j - c| for ANY common vector c;
@@ -124,14 +124,7 @@ def first_half(prm, kin, fa, balls, clumps):
     sx = 0.0
     sy = 0.0
     cnt = 0
-    for i in range(kin.shape[0]):
-        if balls.clump[i] >= 0:
-            continue
-        if not balls.alive[i]:
-            fa[i, 0] = 0.0
-            fa[i, 1] = 0.0
-            fa[i, 2] = 0.0
-            continue
+    for i in free:
         kick_drift(i, kin, fa, balls, h, dt)
         sx += kin[i, 0] - balls.pos0[i, 0]
         sy += kin[i, 1] - balls.pos0[i, 1]
@@ -197,9 +190,9 @@ def locally_damped(f, v, alpha):
 
 
 @njit(**NO_NRT)
-def second_half(prm, kin, fa, balls, eacc):
-    """Local damping + half kick of every free ball; returns True if a ball may have
-    tripped a guard (then ``guards`` says which)."""
+def second_half(prm, kin, fa, balls, eacc, free):
+    """Local damping + half kick of every free ball (``free``, as first_half's); returns
+    True if a ball may have tripped a guard (then ``guards`` says which)."""
     dt = prm[P.DT]
     h = 0.5 * dt
     x0 = prm[P.XMIN]
@@ -209,9 +202,7 @@ def second_half(prm, kin, fa, balls, eacc):
     vmax2 = prm[P.VMAX] * prm[P.VMAX]
     el = 0.0
     suspect = False
-    for i in range(kin.shape[0]):
-        if not balls.alive[i] or balls.clump[i] >= 0:
-            continue
+    for i in free:
         el += damp_kick(i, kin, fa, balls, h, dt)
         if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
             suspect = True
