@@ -13,7 +13,7 @@ from numba import njit
 from scipy import ndimage
 
 from . import params as P
-from .integrate import in_domain
+from .integrate import in_domain, moved
 from .jit import NO_NRT
 
 
@@ -116,6 +116,42 @@ def place_pebbles(prm, kin, balls, clumps, pebbles):
         if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
             suspect = True
     return suspect
+
+
+@njit(**NO_NRT)
+def place_and_check_pebbles(prm, kin, fa, balls, clumps, pebbles, d1, d2, near_wall):
+    """place_pebbles, and in the same pass the Verlet-list check and force reset of each
+    pebble (integrate.moved: external load only, the clump carries the weight). Returns
+    (a pebble may have tripped a guard, top-2 squared displacements, wall flag)."""
+    cpos = clumps.pos
+    cvel = clumps.vel
+    comega = clumps.omega
+    x0 = prm[P.XMIN]
+    y0 = prm[P.YMIN]
+    x1 = prm[P.XMAX]
+    y1 = prm[P.YMAX]
+    vmax2 = prm[P.VMAX] * prm[P.VMAX]
+    cx = prm[P.SHIFT_X]
+    cy = prm[P.SHIFT_Y]
+    wt = prm[P.WALL_TRAVEL]
+    suspect = False
+    last = -1
+    cs = 1.0
+    sn = 0.0
+    for i in pebbles:
+        c = balls.clump[i]
+        if c != last:
+            cs = math.cos(clumps.theta[c])
+            sn = math.sin(clumps.theta[c])
+            last = c
+        kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3] = pebble_motion(
+            cpos[c, 0], cpos[c, 1], cvel[c, 0], cvel[c, 1], comega[c], cs, sn,
+            balls.offset[i, 0], balls.offset[i, 1])
+        kin[i, 4] = comega[c]
+        if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
+            suspect = True
+        d1, d2, near_wall = moved(i, kin, fa, balls, cx, cy, wt, 0.0, 0.0, d1, d2, near_wall)
+    return suspect, d1, d2, near_wall
 
 
 @njit(**NO_NRT)

@@ -20,12 +20,11 @@ from numba import njit
 
 from . import params as P
 from .bonds import bond_forces, bond_scratch
-from .clumps import gather_clumps, place_pebbles
+from .clumps import gather_clumps, place_and_check_pebbles, place_pebbles
 from .contacts import pack_kinematics, pair_forces
 from .control import COUNT, EVERY, PENDING, actuate, control_step
 from .crushing import overloaded
-from .integrate import (clumps_damp_kick, critical_dt, first_half, guards, pebbles_moved,
-                        second_half)
+from .integrate import clumps_damp_kick, critical_dt, first_half, guards, second_half
 from .neighbours import grow_rows, rebuild
 from .state import PairsArrays, WallPairsArrays
 from .walls import move_walls, wall_forces
@@ -119,8 +118,8 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps, free)
         pebbles_astray = False
         if has_clumps:
-            pebbles_astray = place_pebbles(prm, kin, balls, clumps, pebbles)
-            d1, d2, near_wall = pebbles_moved(prm, kin, fa, balls, pebbles, d1, d2, near_wall)
+            pebbles_astray, d1, d2, near_wall = place_and_check_pebbles(
+                prm, kin, fa, balls, clumps, pebbles, d1, d2, near_wall)
         if nfree > 0:       # next step's common shift: this step's mean displacement
             prm[P.SHIFT_X] = sx / nfree
             prm[P.SHIFT_Y] = sy / nfree
@@ -145,12 +144,10 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         if has_clumps:
             gather_clumps(prm[P.GX], prm[P.GY], kin, fa, balls, clumps, pebbles)
             run.eacc[P.E_LOCAL] += clumps_damp_kick(clumps, 0.5 * dt, dt)
-            # the pebbles' full-step motion only where the chunk may end after this step
-            # (its last, a stress check, a controller's reading) or a guard looks: in
-            # between nothing reads it (the next step places them again)
-            if (pebbles_astray or suspect or k == nsteps - 1
-                    or (crush_every > 0 and cnt[0] % crush_every == 0)
-                    or (controlled and ctl.cfg[COUNT] + 1 >= ctl.cfg[EVERY])):
+            # the pebbles' full-step motion only where the chunk ends after this step or a
+            # guard looks: nothing else reads it (the stress check reads the positions, the
+            # controllers clumps and walls; the next step places them again)
+            if pebbles_astray or suspect or k == nsteps - 1:
                 suspect |= place_pebbles(prm, kin, balls, clumps, every_pebble)
         st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
@@ -163,6 +160,10 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
                 and control_step(prm, cnt[0], clumps, walls, ctl):
             st = P.CONTROL_EVENT
         if st != P.OK:
+            if has_clumps and not (pebbles_astray or suspect or k == nsteps - 1) \
+                    and place_pebbles(prm, kin, balls, clumps, every_pebble):
+                g = guards(prm, kin, balls.alive, run.err)    # a guard wins, as at any step
+                st = g if g != P.OK else st
             _write_back(kin, fa, balls)
             return st, k + 1, pr, wp
     _write_back(kin, fa, balls)

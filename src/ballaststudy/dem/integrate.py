@@ -20,7 +20,7 @@ from .submodels import coefficient_row, contact_stiffness
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _moved(i, kin, fa, balls, cx, cy, wt, wx, wy, d1, d2, near_wall):
+def moved(i, kin, fa, balls, cx, cy, wt, wx, wy, d1, d2, near_wall):
     """Verlet-list check of ball i after its drift and the force reset for the next
     forces: weight (wx, wy; zero for pebbles, whose clump carries it) + external load.
     Returns the updated (top-2 squared |dx - c|, wall flag)."""
@@ -130,7 +130,7 @@ def first_half(prm, kin, fa, balls, clumps, free):
         sy += kin[i, 1] - balls.pos0[i, 1]
         cnt += 1
         m = balls.mass[i]
-        d1, d2, near_wall = _moved(i, kin, fa, balls, cx, cy, wt, m * gx, m * gy, d1, d2,
+        d1, d2, near_wall = moved(i, kin, fa, balls, cx, cy, wt, m * gx, m * gy, d1, d2,
                                    near_wall)
     clumps_kick_drift(clumps, h, dt)
     return d1, d2, near_wall, sx, sy, cnt
@@ -147,20 +147,6 @@ def clumps_kick_drift(clumps, h, dt):
         clumps.pos[c, 0] += dt * clumps.vel[c, 0]
         clumps.pos[c, 1] += dt * clumps.vel[c, 1]
         clumps.theta[c] += dt * clumps.omega[c]
-
-
-@njit(**NO_NRT)
-def pebbles_moved(prm, kin, fa, balls, pebbles, d1, d2, near_wall):
-    """After ``place_pebbles``: the same list check and force reset (external load only:
-    the clump carries the weight) for the ``pebbles`` (ball ids)."""
-    cx = prm[P.SHIFT_X]
-    cy = prm[P.SHIFT_Y]
-    wt = prm[P.WALL_TRAVEL]
-    for i in pebbles:
-        if balls.alive[i]:
-            d1, d2, near_wall = _moved(i, kin, fa, balls, cx, cy, wt, 0.0, 0.0, d1, d2,
-                                       near_wall)
-    return d1, d2, near_wall
 
 
 @njit(cache=True, error_model="numpy")
