@@ -126,12 +126,12 @@ def make_kernels(law):
     @njit
     def first(reps, prm, kin, fa, b, cl, free):
         for _ in range(reps):
-            I.first_half(prm, kin, fa, b, cl, free)
+            I.first_half(prm, kin, fa, b, cl, free, 2 * free.shape[0] > kin.shape[0])
 
     @njit
     def second(reps, prm, kin, fa, b, e, free):
         for _ in range(reps):
-            I.second_half(prm, kin, fa, b, e, free)
+            I.second_half(prm, kin, fa, b, e, free, 2 * free.shape[0] > kin.shape[0])
 
     @njit
     def rebuild(reps, run, b, w, pr, wp, bo):

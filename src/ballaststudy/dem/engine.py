@@ -107,6 +107,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
     # the live balls of no clump: the only ones the halves of the step integrate (an
     # assembly's cut leaves dead slots, a rigid specimen has none free)
     free = np.nonzero((balls.clump < 0) & live)[0]
+    dense = 2 * free.shape[0] > n
     controlled = ctl.cfg[EVERY] > 0
     crush_every = int(prm[P.CRUSH_EVERY]) if has_clumps else 0
     if controlled and ctl.cfg[PENDING] > 0:     # velocities an event left pending
@@ -115,7 +116,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         dt = prm[P.DT]
         dt_next = dt
         prm[P.WALL_TRAVEL] += move_walls(walls.seg, walls.vel, walls.omega, walls.centre, dt)
-        d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps, free)
+        d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps, free, dense)
         pebbles_astray = False
         if has_clumps:
             pebbles_astray, d1, d2, near_wall = place_and_check_pebbles(
@@ -140,7 +141,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         if jointed:
             bond_forces(run, kin, balls, fa, bonds, log, bond_work)
         wall_forces(law, run, kin, fa, walls, wp)
-        suspect = second_half(prm, kin, fa, balls, run.eacc, free)
+        suspect = second_half(prm, kin, fa, balls, run.eacc, free, dense)
         if has_clumps:
             gather_clumps(prm[P.GX], prm[P.GY], kin, fa, balls, clumps, pebbles)
             run.eacc[P.E_LOCAL] += clumps_damp_kick(clumps, 0.5 * dt, dt)

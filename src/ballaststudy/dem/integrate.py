@@ -99,12 +99,25 @@ def in_domain(kin, i, x0, y0, x1, y1, vmax2):
             & (abs(kin[i, 4]) < 1e300))
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _first_ball(i, kin, fa, balls, h, dt, gx, gy, cx, cy, wt, d1, d2, near_wall, sx, sy):
+    """first_half for free ball i."""
+    kick_drift(i, kin, fa, balls, h, dt)
+    sx += kin[i, 0] - balls.pos0[i, 0]
+    sy += kin[i, 1] - balls.pos0[i, 1]
+    m = balls.mass[i]
+    d1, d2, near_wall = moved(i, kin, fa, balls, cx, cy, wt, m * gx, m * gy, d1, d2, near_wall)
+    return d1, d2, near_wall, sx, sy
+
+
 @njit(**NO_NRT)
-def first_half(prm, kin, fa, balls, clumps, free):
-    """One pass per free ball (``free``: the live balls of no clump, ascending) over its
-    packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m, material) and force row ``fa`` =
-    (fx, fy, mz): half kick, drift, the displacement since the last neighbour build, force
-    reset to weight + external load. Then half kick + drift of clumps.
+def first_half(prm, kin, fa, balls, clumps, free, dense):
+    """One pass per free ball (``free``: the live balls of no clump, ascending; ``dense``:
+    most slots are, and a scan of every slot is then faster than the list: 7 % of a
+    bonded box step) over its packed row ``kin`` = (x, y, vx, vy, omega, R, 1/m,
+    material) and force row ``fa`` = (fx, fy, mz): half kick, drift, the displacement
+    since the last neighbour build, force reset to weight + external load. Then half kick
+    + drift of clumps.
 
     Verlet-list validity (exact, by the triangle inequality): a pair not listed had a
     gap > skin, and |dx_i - dx_j| <= |dx_i - c| + |dx_j - c| for ANY common vector c;
@@ -123,17 +136,17 @@ def first_half(prm, kin, fa, balls, clumps, free):
     near_wall = False
     sx = 0.0
     sy = 0.0
-    cnt = 0
-    for i in free:
-        kick_drift(i, kin, fa, balls, h, dt)
-        sx += kin[i, 0] - balls.pos0[i, 0]
-        sy += kin[i, 1] - balls.pos0[i, 1]
-        cnt += 1
-        m = balls.mass[i]
-        d1, d2, near_wall = moved(i, kin, fa, balls, cx, cy, wt, m * gx, m * gy, d1, d2,
-                                   near_wall)
+    if dense:
+        for i in range(kin.shape[0]):
+            if balls.clump[i] < 0 and balls.alive[i]:
+                d1, d2, near_wall, sx, sy = _first_ball(i, kin, fa, balls, h, dt, gx, gy, cx, cy, wt,
+                                                        d1, d2, near_wall, sx, sy)
+    else:
+        for i in free:
+            d1, d2, near_wall, sx, sy = _first_ball(i, kin, fa, balls, h, dt, gx, gy, cx, cy, wt,
+                                                    d1, d2, near_wall, sx, sy)
     clumps_kick_drift(clumps, h, dt)
-    return d1, d2, near_wall, sx, sy, cnt
+    return d1, d2, near_wall, sx, sy, free.shape[0]
 
 
 @njit(**NO_NRT)
@@ -176,9 +189,9 @@ def locally_damped(f, v, alpha):
 
 
 @njit(**NO_NRT)
-def second_half(prm, kin, fa, balls, eacc, free):
-    """Local damping + half kick of every free ball (``free``, as first_half's); returns
-    True if a ball may have tripped a guard (then ``guards`` says which)."""
+def second_half(prm, kin, fa, balls, eacc, free, dense):
+    """Local damping + half kick of every free ball (``free``, ``dense``: as first_half's);
+    returns True if a ball may have tripped a guard (then ``guards`` says which)."""
     dt = prm[P.DT]
     h = 0.5 * dt
     x0 = prm[P.XMIN]
@@ -188,10 +201,15 @@ def second_half(prm, kin, fa, balls, eacc, free):
     vmax2 = prm[P.VMAX] * prm[P.VMAX]
     el = 0.0
     suspect = False
-    for i in free:
-        el += damp_kick(i, kin, fa, balls, h, dt)
-        if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
-            suspect = True
+    if dense:
+        for i in range(kin.shape[0]):
+            if balls.alive[i] and balls.clump[i] < 0:
+                el += damp_kick(i, kin, fa, balls, h, dt)
+                suspect |= not in_domain(kin, i, x0, y0, x1, y1, vmax2)
+    else:
+        for i in free:
+            el += damp_kick(i, kin, fa, balls, h, dt)
+            suspect |= not in_domain(kin, i, x0, y0, x1, y1, vmax2)
     eacc[P.E_LOCAL] += el
     return suspect
 
