@@ -82,39 +82,33 @@ def pebble_motion(cx, cy, vx, vy, w, cs, sn, ox, oy):
     return cx + rx, cy + ry, vx - w * ry, vy + w * rx
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _place(i, kin, balls, clumps, last, cs, sn):
+    """Pebble i on its clump's rigid motion; the clump's rotation (cos, sin) = (cs, sn) is
+    computed again only if it is not the ``last`` one's (a clump's pebbles mostly follow
+    each other). Returns (its clump, cs, sn)."""
+    c = balls.clump[i]
+    if c != last:
+        cs = math.cos(clumps.theta[c])
+        sn = math.sin(clumps.theta[c])
+    kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3] = pebble_motion(
+        clumps.pos[c, 0], clumps.pos[c, 1], clumps.vel[c, 0], clumps.vel[c, 1], clumps.omega[c],
+        cs, sn, balls.offset[i, 0], balls.offset[i, 1])
+    kin[i, 4] = clumps.omega[c]
+    return c, cs, sn
+
+
 @njit(**NO_NRT)
 def place_pebbles(prm, kin, balls, clumps, pebbles):
-    """Position/velocity of the ``pebbles`` (their ball ids, ascending) from the rigid
+    """Position/velocity of the ``pebbles`` (live ball ids, ascending) from the rigid
     motion of their clump. Returns True if a pebble may have tripped a guard (then
     ``integrate.guards`` says which)."""
-    offset = balls.offset
-    cpos = clumps.pos
-    cvel = clumps.vel
-    comega = clumps.omega
-    ctheta = clumps.theta
-    x0 = prm[P.XMIN]
-    y0 = prm[P.YMIN]
-    x1 = prm[P.XMAX]
-    y1 = prm[P.YMAX]
     vmax2 = prm[P.VMAX] * prm[P.VMAX]
     suspect = False
-    last = -1                      # a clump's pebbles mostly follow each other: its
-    cs = 1.0                       # rotation is computed once per run of them
-    sn = 0.0
+    last, cs, sn = -1, 1.0, 0.0
     for i in pebbles:
-        c = balls.clump[i]
-        if not balls.alive[i]:
-            continue
-        if c != last:
-            cs = math.cos(ctheta[c])
-            sn = math.sin(ctheta[c])
-            last = c
-        kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3] = pebble_motion(
-            cpos[c, 0], cpos[c, 1], cvel[c, 0], cvel[c, 1], comega[c], cs, sn,
-            offset[i, 0], offset[i, 1])
-        kin[i, 4] = comega[c]
-        if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
-            suspect = True
+        last, cs, sn = _place(i, kin, balls, clumps, last, cs, sn)
+        suspect |= not in_domain(kin, i, prm[P.XMIN], prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], vmax2)
     return suspect
 
 
@@ -123,34 +117,14 @@ def place_and_check_pebbles(prm, kin, fa, balls, clumps, pebbles, d1, d2, near_w
     """place_pebbles, and in the same pass the Verlet-list check and force reset of each
     pebble (integrate.moved: external load only, the clump carries the weight). Returns
     (a pebble may have tripped a guard, top-2 squared displacements, wall flag)."""
-    cpos = clumps.pos
-    cvel = clumps.vel
-    comega = clumps.omega
-    x0 = prm[P.XMIN]
-    y0 = prm[P.YMIN]
-    x1 = prm[P.XMAX]
-    y1 = prm[P.YMAX]
     vmax2 = prm[P.VMAX] * prm[P.VMAX]
-    cx = prm[P.SHIFT_X]
-    cy = prm[P.SHIFT_Y]
-    wt = prm[P.WALL_TRAVEL]
     suspect = False
-    last = -1
-    cs = 1.0
-    sn = 0.0
+    last, cs, sn = -1, 1.0, 0.0
     for i in pebbles:
-        c = balls.clump[i]
-        if c != last:
-            cs = math.cos(clumps.theta[c])
-            sn = math.sin(clumps.theta[c])
-            last = c
-        kin[i, 0], kin[i, 1], kin[i, 2], kin[i, 3] = pebble_motion(
-            cpos[c, 0], cpos[c, 1], cvel[c, 0], cvel[c, 1], comega[c], cs, sn,
-            balls.offset[i, 0], balls.offset[i, 1])
-        kin[i, 4] = comega[c]
-        if not in_domain(kin, i, x0, y0, x1, y1, vmax2):
-            suspect = True
-        d1, d2, near_wall = moved(i, kin, fa, balls, cx, cy, wt, 0.0, 0.0, d1, d2, near_wall)
+        last, cs, sn = _place(i, kin, balls, clumps, last, cs, sn)
+        suspect |= not in_domain(kin, i, prm[P.XMIN], prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], vmax2)
+        d1, d2, near_wall = moved(i, kin, fa, balls, prm[P.SHIFT_X], prm[P.SHIFT_Y],
+                                  prm[P.WALL_TRAVEL], 0.0, 0.0, d1, d2, near_wall)
     return suspect, d1, d2, near_wall
 
 
