@@ -99,32 +99,21 @@ def _place(i, kin, balls, clumps, last, cs, sn):
 
 
 @njit(**NO_NRT)
-def place_pebbles(prm, kin, balls, clumps, pebbles):
+def place_pebbles(prm, kin, fa, balls, clumps, pebbles, check, d1, d2, near_wall):
     """Position/velocity of the ``pebbles`` (live ball ids, ascending) from the rigid
-    motion of their clump. Returns True if a pebble may have tripped a guard (then
-    ``integrate.guards`` says which)."""
+    motion of their clump; with ``check``, in the same pass, each one's Verlet-list check
+    and force reset (integrate.moved: external load only, the clump carries the weight).
+    Returns (a pebble may have tripped a guard: ``integrate.guards`` says which, top-2
+    squared displacements, wall flag)."""
     vmax2 = prm[P.VMAX] * prm[P.VMAX]
     suspect = False
     last, cs, sn = -1, 1.0, 0.0
     for i in pebbles:
         last, cs, sn = _place(i, kin, balls, clumps, last, cs, sn)
         suspect |= not in_domain(kin, i, prm[P.XMIN], prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], vmax2)
-    return suspect
-
-
-@njit(**NO_NRT)
-def place_and_check_pebbles(prm, kin, fa, balls, clumps, pebbles, d1, d2, near_wall):
-    """place_pebbles, and in the same pass the Verlet-list check and force reset of each
-    pebble (integrate.moved: external load only, the clump carries the weight). Returns
-    (a pebble may have tripped a guard, top-2 squared displacements, wall flag)."""
-    vmax2 = prm[P.VMAX] * prm[P.VMAX]
-    suspect = False
-    last, cs, sn = -1, 1.0, 0.0
-    for i in pebbles:
-        last, cs, sn = _place(i, kin, balls, clumps, last, cs, sn)
-        suspect |= not in_domain(kin, i, prm[P.XMIN], prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], vmax2)
-        d1, d2, near_wall = moved(i, kin, fa, balls, prm[P.SHIFT_X], prm[P.SHIFT_Y],
-                                  prm[P.WALL_TRAVEL], 0.0, 0.0, d1, d2, near_wall)
+        if check:
+            d1, d2, near_wall = moved(i, kin, fa, balls, prm[P.SHIFT_X], prm[P.SHIFT_Y],
+                                      prm[P.WALL_TRAVEL], 0.0, 0.0, d1, d2, near_wall)
     return suspect, d1, d2, near_wall
 
 

@@ -20,7 +20,7 @@ from numba import njit
 
 from . import params as P
 from .bonds import bond_forces, bond_scratch
-from .clumps import gather_clumps, place_and_check_pebbles, place_pebbles
+from .clumps import gather_clumps, place_pebbles
 from .contacts import pack_kinematics, pair_forces
 from .control import COUNT, EVERY, PENDING, actuate, control_step
 from .crushing import overloaded
@@ -119,8 +119,8 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
         d1, d2, near_wall, sx, sy, nfree = first_half(prm, kin, fa, balls, clumps, free, dense)
         pebbles_astray = False
         if has_clumps:
-            pebbles_astray, d1, d2, near_wall = place_and_check_pebbles(
-                prm, kin, fa, balls, clumps, pebbles, d1, d2, near_wall)
+            pebbles_astray, d1, d2, near_wall = place_pebbles(
+                prm, kin, fa, balls, clumps, pebbles, True, d1, d2, near_wall)
         if nfree > 0:       # next step's common shift: this step's mean displacement
             prm[P.SHIFT_X] = sx / nfree
             prm[P.SHIFT_Y] = sy / nfree
@@ -149,7 +149,7 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
             # guard looks: nothing else reads it (the stress check reads the positions, the
             # controllers clumps and walls; the next step places them again)
             if pebbles_astray or suspect or k == nsteps - 1:
-                suspect |= place_pebbles(prm, kin, balls, clumps, every_pebble)
+                suspect |= _placed(prm, kin, fa, balls, clumps, every_pebble)
         st = guards(prm, kin, balls.alive, run.err) if suspect else P.OK
         prm[P.DT] = dt_next
         # a controller's event at the same step wins the status; Simulation._run_kernel
@@ -162,13 +162,19 @@ def run_steps(nsteps, law, run, balls, walls, clumps, pr, wp, bonds, log, ctl):
             st = P.CONTROL_EVENT
         if st != P.OK:
             if has_clumps and not (pebbles_astray or suspect or k == nsteps - 1) \
-                    and place_pebbles(prm, kin, balls, clumps, every_pebble):
+                    and _placed(prm, kin, fa, balls, clumps, every_pebble):
                 g = guards(prm, kin, balls.alive, run.err)    # a guard wins, as at any step
                 st = g if g != P.OK else st
             _write_back(kin, fa, balls)
             return st, k + 1, pr, wp
     _write_back(kin, fa, balls)
     return P.OK, nsteps, pr, wp
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _placed(prm, kin, fa, balls, clumps, pebbles):
+    """place_pebbles without the list check: whether a pebble may have tripped a guard."""
+    return place_pebbles(prm, kin, fa, balls, clumps, pebbles, False, 0.0, 0.0, False)[0]
 
 
 @njit(cache=True, error_model="numpy")
