@@ -105,15 +105,16 @@ def place_pebbles(prm, kin, fa, balls, clumps, pebbles, check, d1, d2, near_wall
     and force reset (integrate.moved: external load only, the clump carries the weight).
     Returns (a pebble may have tripped a guard: ``integrate.guards`` says which, top-2
     squared displacements, wall flag)."""
+    x0, y0, x1, y1 = prm[P.XMIN], prm[P.YMIN], prm[P.XMAX], prm[P.YMAX]
     vmax2 = prm[P.VMAX] * prm[P.VMAX]
+    cx, cy, wt = prm[P.SHIFT_X], prm[P.SHIFT_Y], prm[P.WALL_TRAVEL]
     suspect = False
     last, cs, sn = -1, 1.0, 0.0
     for i in pebbles:
         last, cs, sn = _place(i, kin, balls, clumps, last, cs, sn)
-        suspect |= not in_domain(kin, i, prm[P.XMIN], prm[P.YMIN], prm[P.XMAX], prm[P.YMAX], vmax2)
+        suspect |= not in_domain(kin, i, x0, y0, x1, y1, vmax2)
         if check:
-            d1, d2, near_wall = moved(i, kin, fa, balls, prm[P.SHIFT_X], prm[P.SHIFT_Y],
-                                      prm[P.WALL_TRAVEL], 0.0, 0.0, d1, d2, near_wall)
+            d1, d2, near_wall = moved(i, kin, fa, balls, cx, cy, wt, 0.0, 0.0, d1, d2, near_wall)
     return suspect, d1, d2, near_wall
 
 
