@@ -22,7 +22,7 @@ from . import params as P
 from .bonds import bond_forces, bond_scratch
 from .clumps import gather_clumps, place_pebbles
 from .contacts import pack_kinematics, pair_forces
-from .control import COUNT, EVERY, PENDING, actuate, control_step
+from .control import EVERY, PENDING, actuate, control_step
 from .crushing import overloaded
 from .integrate import clumps_damp_kick, critical_dt, first_half, guards, second_half
 from .neighbours import grow_rows, rebuild
