@@ -19,15 +19,6 @@ from ballaststudy.rig.biaxial import MEMBRANE, PLATEN, BiaxialParams, BiaxialRig
 from ballaststudy.rig.library import load_library
 
 
-@pytest.fixture(scope="module")
-def specimen(small_library, tmp_path_factory):
-    p = BiaxialParams(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000,
-                      fill_area_ratio=0.9)
-    path = tmp_path_factory.mktemp("cal") / "assembled.nc"
-    assemble_biaxial(load_library(small_library), p, seed=7).save(path)
-    return path
-
-
 def test_parameters_applied_as_named(specimen):
     rig = BiaxialRig.load(specimen)
     sim = rig.sim

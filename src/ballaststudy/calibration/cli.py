@@ -30,6 +30,8 @@ from ..provenance import Recorder
 from ..rig.kinds import RUNS_TESTS, kind_for_test, kind_of, rig_classes
 from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import MATERIAL, MODIFIERS, material_parameter
+from ..cluster.pool import case_pool
+from ..cluster.spec import KINDS, executor_spec
 from ..scenario.runner import BACKENDS, check_backend
 from ..scenario.scenario import check_stone_model, splitting_of
 from ..stones import DEFAULT
@@ -204,21 +206,23 @@ def _calibrate(args):
                                 "stone_model": cfg.get("stone_model", DEFAULT), "splitting": splitting_of(cfg)},
                         seed=cfg["seed"])
     mapping = stage_mapping(cfg, args.config, args.strength_envelope, kind)
-    evaluate = Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
-                         cfg, cal["cycles"], cal["quantity"], out, jobs=args.jobs,
-                         progress=not args.quiet, backend=args.backend, mapping=mapping)
+    spec = executor_spec(cfg, args.config, args.executor, args.scheduler_address)
     targets = [str(m) for m in args.measured]
     t0 = time.time()
-    res = calibrate(evaluate, y, lower, upper, cal["initial_design"], cal["iterations"],
-                    cal["batch"], seed=cfg["seed"], include=t_before if inside else None,
-                    measurement_var=cal["measurement_sd"] ** 2, n_samples=cal["posterior_samples"],
-                    point_test=point_test)
-    rounds = list(res.rounds)
-    if not inside:                          # Table 4.2 outside the prior: evaluated apart
-        evaluate(t_before[None])
-        rounds.append(-2)
-    evaluate(res.posterior.mean[None])      # the calibrated set, from DEM runs
-    rounds.append(-1)
+    with case_pool(spec, args.jobs, out / "workers") as pool:
+        evaluate = Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
+                             cfg, cal["cycles"], cal["quantity"], out, jobs=args.jobs,
+                             progress=not args.quiet, backend=args.backend, mapping=mapping, pool=pool)
+        res = calibrate(evaluate, y, lower, upper, cal["initial_design"], cal["iterations"],
+                        cal["batch"], seed=cfg["seed"], include=t_before if inside else None,
+                        measurement_var=cal["measurement_sd"] ** 2, n_samples=cal["posterior_samples"],
+                        point_test=point_test)
+        rounds = list(res.rounds)
+        if not inside:                          # Table 4.2 outside the prior: evaluated apart
+            evaluate(t_before[None])
+            rounds.append(-2)
+        evaluate(res.posterior.mean[None])      # the calibrated set, from DEM runs
+        rounds.append(-1)
     before = 0 if inside else len(rounds) - 2
     mapped = evaluate.mapping_records()
     attrs = {"targets": ", ".join(targets), "method": METHOD, "stress_mapping": mapping.kind,
@@ -342,9 +346,14 @@ def target_arguments(c, specimens_help):
                    help="their conditions YAMLs, in the same order")
     c.add_argument("--specimens", required=True, nargs="+", type=Path, help=specimens_help)
     c.add_argument("--out-dir", required=True, type=Path)
-    c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel")
+    c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel (executor local)")
     c.add_argument("--backend", choices=BACKENDS, default="cpu",
-                   help="cpu: --jobs processes; cuda: every case in one GPU batch")
+                   help="cpu: in the executor's pool; cuda: every case in one GPU batch")
+    c.add_argument("--executor", choices=KINDS, help="where the cpu cases run (default: the config's "
+                   "executor.kind): local processes, a running Dask scheduler, or workers submitted "
+                   "to slurm, pbs, sge or lsf")
+    c.add_argument("--scheduler-address", help="executor dask: the scheduler's address (default: the "
+                   "config's executor.scheduler_address)")
     c.add_argument("--strength-envelope", type=Path, help="the specimens' strength envelope "
                    "(case envelope), for the config's stress_mapping strength_ratio")
     c.add_argument("--config", default="config/config.yaml", type=Path)

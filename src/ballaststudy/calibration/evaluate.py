@@ -28,13 +28,14 @@ class Evaluator:
 
     def __init__(self, names, specimens, tests, config, cycles, quantity, out_dir, jobs=1,
                  progress=False, effect=None, base=None, perturbation_m_s=0.0, perturbation_seed=0,
-                 backend="cpu", mapping=None, share_first_loading=False):
+                 backend="cpu", mapping=None, share_first_loading=False, pool=None):
         """tests: [(conditions YAML, measured N within the cycles)], one per target;
         ``names``: the parameters varied - material ones, or ``effect``'s (a modifier)
         with the material parameters fixed at ``base`` ({name: value}; {}: Table 4.2's);
         ``perturbation_m_s`` > 0: every case starts from its specimen's velocities perturbed
         by that much (Simulation.perturb_velocities, seeded by ``perturbation_seed`` + the
-        case index): the chaos probe of loop.select. ``backend``: run_cases' (cpu, cuda).
+        case index): the chaos probe of loop.select. ``backend``: run_cases' (cpu, cuda);
+        ``pool``: where the cpu cases run (cluster.pool; None: ``jobs`` processes here).
         ``mapping``: the stress mapping of the tests' q onto the specimens (scenario.mapping;
         None: none), the same for every set. ``share_first_loading``: the plain model's cases keep
         their state after cycle 0 in the cache, and a set of a hook-only effect (abrasion)
@@ -42,7 +43,7 @@ class Evaluator:
         self.names, self.specimens = list(names), [str(s) for s in specimens]
         self.cycles, self.quantity = int(cycles), quantity
         self.cache, self.jobs, self.progress = Path(out_dir) / "cases", int(jobs), progress
-        self.backend = backend
+        self.backend, self.pool = backend, pool
         self.shared = self.cache if share_first_loading else None
         self.kind = kind_of(open_netcdf(self.specimens[0], "assembled"))
         # read once (or given, loaded, by a caller making several Evaluators): a config
@@ -94,7 +95,7 @@ class Evaluator:
                  for scs in per_set]
         run_cases([(s, k, f[j][k]) for scs, f in zip(per_set, files) for j, s in enumerate(scs)
                    for k in range(len(self.specimens))], self.jobs, self.progress,
-                  f"{len(batch)} parameter set(s)", self.backend, self.shared)
+                  f"{len(batch)} parameter set(s)", self.backend, self.shared, self.pool)
         out = []
         for values, scs, f in zip(batch, per_set, files):
             read = [[case_curve(p, self.quantity, self.cycles) for p in per_test] for per_test in f]

@@ -34,6 +34,8 @@ from ..measured.importer import load_conditions
 from ..provenance import Recorder
 from ..scenario.mapping import stage_mapping
 from ..scenario.modifiers import EFFECTS, MODIFIERS, load_material_values
+from ..cluster.pool import case_pool
+from ..cluster.spec import executor_spec
 from ..scenario.runner import check_backend
 from ..scenario.scenario import check_stone_model, splitting_of
 from ..stones import DEFAULT
@@ -197,27 +199,30 @@ def _loop(args):
     # the plain cases keep their first-loaded state only for a hook-only candidate (abrasion)
     share = any(MODIFIERS[e].hook_only for e in lp["effects"])
 
+    spec = executor_spec(cfg, args.config, args.executor, args.scheduler_address)
+
     def make(names, effect=None, perturbation_m_s=0.0):
         return Evaluator(names, args.specimens, [(c, n) for c, (n, _) in zip(args.conditions, measured)],
                          cfg, lp["cycles"], lp["quantity"], out, jobs=args.jobs,
                          progress=not args.quiet, effect=effect, base=base, perturbation_m_s=perturbation_m_s,
-                         backend=args.backend, mapping=mapping, share_first_loading=share)
+                         backend=args.backend, mapping=mapping, share_first_loading=share, pool=pool)
 
-    plain_eval = make([])
-    plain_at = plain_eval(np.zeros((1, 0)))[0]
-    probe_eval = make([], perturbation_m_s=PROBE_M_S) if lp["specimen_share"] == 0 else None
-    probe_at = probe_eval(np.zeros((1, 0)))[0] if probe_eval else None
-    conditions = [load_conditions(c) for c in args.conditions]
-    untestable = [e for e in lp["effects"] if not MODIFIERS[e].testable(conditions)]
-    runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
-    dof = residual_dof(len(plain_at), lp["specimen_share"])      # the loop runs one chaos probe
-    candidates, plain, scatter = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"], dof)
-    chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, scatter)
-    after = None
-    if chosen:
-        best = candidates[chosen]
-        best.evaluate(best.fit[0][None])            # the chosen effect at its fitted value
-        after = best.evaluate.sets[-1]
+    with case_pool(spec, args.jobs, out / "workers") as pool:
+        plain_eval = make([])
+        plain_at = plain_eval(np.zeros((1, 0)))[0]
+        probe_eval = make([], perturbation_m_s=PROBE_M_S) if lp["specimen_share"] == 0 else None
+        probe_at = probe_eval(np.zeros((1, 0)))[0] if probe_eval else None
+        conditions = [load_conditions(c) for c in args.conditions]
+        untestable = [e for e in lp["effects"] if not MODIFIERS[e].testable(conditions)]
+        runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
+        dof = residual_dof(len(plain_at), lp["specimen_share"])      # the loop runs one chaos probe
+        candidates, plain, scatter = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"], dof)
+        chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, scatter)
+        after = None
+        if chosen:
+            best = candidates[chosen]
+            best.evaluate(best.fit[0][None])            # the chosen effect at its fitted value
+            after = best.evaluate.sets[-1]
     probe_set = probe_eval.sets[0] if probe_eval else None
     files = write_outputs(out, LoopRun(
         lp, targets,

@@ -15,6 +15,7 @@ from importlib import metadata
 from pathlib import Path
 
 from .. import __version__
+from ..atomic import atomic_path
 
 _LIBRARIES = ("numpy", "scipy", "numba", "trimesh", "xarray", "netCDF4", "shapely", "pandas")
 
@@ -96,9 +97,8 @@ class Recorder:
         output = Path(output)
         rec = dict(self.record, output={str(p): sha256_file(p) for p in (output, *map(Path, also))})
         side = output.with_name(output.name + ".prov.json")
-        tmp = side.with_name(side.name + ".tmp")
-        tmp.write_text(json.dumps(rec, indent=1, sort_keys=True, default=str))
-        tmp.replace(side)
+        with atomic_path(side) as tmp:
+            tmp.write_text(json.dumps(rec, indent=1, sort_keys=True, default=str))
         return side
 
     def json(self):

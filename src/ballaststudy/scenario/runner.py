@@ -2,8 +2,8 @@
 specimen, takes the scenario's rig parameters, applies its modifiers in order (and the
 chaos probe's perturbation), then runs the cycles; a case with a checkpoint beside its
 output resumes from it (the modifiers' effects live in the checkpointed state, only their
-end-of-cycle hooks are attached again). ``run_cases`` runs many in parallel processes, or
-all at once as one GPU batch (backend ``cuda``: rig.batched), and skips finished ones, so
+end-of-cycle hooks are attached again). ``run_cases`` runs many in a pool (cluster.pool:
+processes here, or a Dask cluster's workers), or all at once as one GPU batch (backend ``cuda``: rig.batched), and skips finished ones, so
 an interrupted calibration or loop resumes.
 
 Given a cache folder to share the first loading in (``shared``), a case of the plain model
@@ -22,12 +22,14 @@ parameters (BiaxialRun.continue_under): the same bytes as a run of its own, and 
 specimen gives way in its first loading the whole run is one. (Both on the cpu backend.)"""
 import json
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import replace
 from pathlib import Path
 
+from numba.core import config as numba_config
 from tqdm import tqdm
 
+from ..cluster.guard import checkpoint_guard
+from ..cluster.pool import LocalPool
 from ..dem.gpu import cuda_available
 from ..inputs import open_netcdf
 from ..rig.batched import run_batched
@@ -165,6 +167,7 @@ def write_case(run, scenario, k, out, figures=False, attrs=None):
         "modifiers_json": json.dumps(scenario.modifier_values()),
         "material_parameters_json": json.dumps(scenario.material_values()),     # {}: Table 4.2's
         **scenario.mapping,         # the stress mapping the test's q bounds went through
+        "numba_cpu_target": numba_config.CPU_NAME or "host",   # NUMBA_CPU_NAME: what the bits hold on
         **(attrs or {})})
 
 
@@ -186,6 +189,9 @@ def run_case(scenario, k, out, shared=None, start=None):
         run = _from_first_cycle(scenario, k, out, start)
     if run is None:
         run, resumed = prepared_run(scenario, k, out)
+    guard = checkpoint_guard(f"case {k} of {scenario.key}")
+    if guard:
+        run.hooks.append(guard)
     if shared and not resumed and not prefix and keeps_first_loading(scenario):
         if run.s.cycle == 0:
             run.run(stop_after=1)
@@ -205,11 +211,12 @@ def check_backend(backend):
                           "(a machine with one, and pip install -e '.[cuda]'), or use cpu")
 
 
-def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared=None):
+def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared=None, pool=None):
     """Every (scenario, k, out) in ``cases``, each ``out`` once (scenarios of one key share
-    their cases): ``jobs`` processes at a time (cpu; cycle 0 run once for cases of one
-    first_cycle_key, and the first loading shared in the cache folder ``shared``, see
-    above), or every unfinished case in GPU batches, one per contact law (cuda)."""
+    their cases): in ``pool`` (cluster.pool; None: ``jobs`` processes here) on the cpu
+    (cycle 0 run once for cases of one first_cycle_key, and the first loading shared in the
+    cache folder ``shared``, see above), or every unfinished case in GPU batches, one per
+    contact law (cuda)."""
     check_backend(backend)
     if backend == "cuda" and not all(stone_model(c[0].stone_model).gpu_batch for c in cases):
         raise ConfigError("config", "stone_model", "the GPU batch (backend cuda) runs bonded "
@@ -225,8 +232,10 @@ def run_cases(cases, jobs=1, progress=False, desc="cases", backend="cpu", shared
     else:
         starts = _shared_first_cycles(cases, shared)
         firsts = {state: case for case, state in zip(cases, starts) if state and not state.is_file()}
-        _in_processes(run_first_cycle, [(c[0], c[1], state) for state, c in firsts.items()], jobs)
-        _in_processes(run_case, [(*c, shared, start) for c, start in zip(cases, starts)], jobs, bar.update)
+        pool = pool or LocalPool(jobs)
+        pool.map(run_first_cycle, [(c[0], c[1], state) for state, c in firsts.items()])
+        pool.map(run_case, [(*c, shared, start) for c, start in zip(cases, starts)], bar.update,
+                 progress=lambda call: checkpoint_stamp(call[2]))
         for state in {s for s in starts if s}:
             state.unlink(missing_ok=True)
             if state.parent.is_dir() and not any(state.parent.iterdir()):
@@ -250,19 +259,14 @@ def _shared_first_cycles(cases, shared):
     return [s if s and (count[s] > 1 or s.is_file()) else None for s in states]
 
 
-def _in_processes(fn, calls, jobs, done=None):
-    """fn(*call) for every call, ``jobs`` processes at a time (or here, one after another)."""
-    if jobs > 1 and len(calls) > 1:
-        with ProcessPoolExecutor(jobs) as pool:
-            for future in as_completed([pool.submit(fn, *c) for c in calls]):
-                future.result()
-                if done:
-                    done()
-        return
-    for c in calls:
-        fn(*c)
-        if done:
-            done()
+def checkpoint_stamp(out):
+    """(size, mtime) of the checkpoint beside ``out``, None without one: it changes as the
+    case gets on (cluster.pool resubmits a case lost with its workers while it does)."""
+    try:
+        st = checkpoint_of(out).stat()
+    except OSError:
+        return None
+    return st.st_size, st.st_mtime_ns
 
 
 def _run_on_gpu(cases, bar):
