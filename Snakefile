@@ -6,6 +6,7 @@ import time
 
 from snakemake.utils import min_version, validate
 
+from ballaststudy.cluster.spec import executor_spec
 from ballaststudy.scenario.scenario import check_stone_model
 
 from ballaststudy.config import ConfigError, check_domain, database_seed, validate as validate_file, form_params, load_databases, load_yaml, select_databases, unknown_set_databases
@@ -39,6 +40,8 @@ configfile: "config/config.yaml"
 try:
     check_domain(validate_file(config, "config", CONFIG_FILE), CONFIG_FILE)
     check_stone_model(config, CONFIG_FILE)
+    # where the calibration's and the loop's cases run (the stage checks its batch system)
+    EXECUTOR = executor_spec(config, CONFIG_FILE, submit=False)
     DATABASES = load_databases(config["databases_file"], form_params(config))
     NAMES = select_databases(config, DATABASES, CONFIG_FILE)
     for note in unknown_set_databases(config, DATABASES):

@@ -1,27 +1,37 @@
 """On a real one-node SLURM (slurmctld, slurmd, munge: tests/cluster/one_node_slurm.sh,
 skipped where its binaries are absent): dask-jobqueue submits a calibration round's workers
 with sbatch, a worker job cancelled with scancel mid-case is survived, and the round gives
-the local pool's bits."""
+the local pool's bits; `snakemake --profile profiles/slurm calibrate` on a small config ends
+with a local run's evaluations.nc. Every test process shares one SLURM (the script counts
+its users)."""
+import os
+import shutil
 import subprocess
 import threading
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
+import yaml
 
 from ballaststudy.cluster.pool import case_pool
 from ballaststudy.cluster.spec import executor_spec
 
+from ..biaxial_fast import FAST_LOADING
+from ..shipped import ROOT
 from .rounds import checkpointed_case, round_of_two, same_cases
 
-SCRIPT = Path(__file__).resolve().parents[1] / "cluster" / "one_node_slurm.sh"
+SCRIPT = ROOT / "tests" / "cluster" / "one_node_slurm.sh"
+DATA = ROOT / "../shared/data/measured"
 
 
 @pytest.fixture(scope="module")
-def slurm(tmp_path_factory):
+def slurm():
     """SLURM_CONF of a one-node SLURM up for this module's tests, stopped after them."""
-    folder = tmp_path_factory.mktemp("slurm")
+    folder = Path(tempfile.gettempdir()) / f"ballaststudy-slurm-{os.getuid()}"
     up = subprocess.run([str(SCRIPT), "start", str(folder)], capture_output=True, text=True)
     if up.returncode == 3:
         pytest.skip(up.stderr.strip())
@@ -63,3 +73,68 @@ def test_slurm_workers_run_a_round_and_survive_a_cancelled_job(slurm, specimen, 
     assert not checkpoint.exists()                    # its case finished after all
     assert all(np.array_equal(a, b) for a, b in zip(at, at_slurm))
     same_cases(files, files_slurm)
+
+
+def _snakemake(cwd, *args):
+    out = subprocess.run(["snakemake", *args], cwd=cwd, capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+
+
+def _edit(path, change):
+    cfg = yaml.safe_load(path.read_text())
+    change(cfg)
+    path.write_text(yaml.safe_dump(cfg))
+
+
+def _small_calibration(cfg):
+    """One 3 kg database, two 0.15 x 0.30 m specimens, mu alone: 3 sets x 2 cases x 6 cycles
+    (the target's points at N = 1 and 5), quick first loadings (tests/biaxial_fast.py)."""
+    cfg["measured"]["data_dir"] = str(DATA)
+    cfg["specimens"]["biaxial_small"]["cases"] = 2
+    cfg["strength"]["cases"] = 2
+    cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
+    cfg["calibration"].update(cases=2, cycles=6, parameters={"mu": {"min": 0.3, "max": 1.2}}, initial_design=2,
+                              iterations=0, posterior_samples=1024)
+
+
+@pytest.fixture(scope="module")
+def small_workflow(tmp_path_factory):
+    """A workflow folder whose calibrate target is small, everything before it run."""
+    if not DATA.is_dir():
+        pytest.skip("the shared measured data are not here (calibrate's input is imported from them)")
+    d = tmp_path_factory.mktemp("workflow")
+    shutil.copy(ROOT / "Snakefile", d)
+    for part in ("workflow", "profiles"):
+        shutil.copytree(ROOT / part, d / part, symlinks=False)
+    shutil.copytree(ROOT / "config" / "measured", d / "config" / "measured")
+    dbs = yaml.safe_load((ROOT / "config" / "databases.yaml").read_text())
+    dbs["defaults"]["mass_kg"] = 3
+    dbs["databases"] = {"box_test": dbs["databases"]["box_test"]}
+    (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
+    shutil.copy(ROOT / "config" / "config.yaml", d / "config")
+    _edit(d / "config" / "config.yaml", _small_calibration)
+    _snakemake(d, "--cores", "2", "calibrate", "--omit-from", "calibrate")
+    return d
+
+
+def test_snakemake_calibrate_on_slurm_ends_as_a_local_run(slurm, small_workflow, tmp_path):
+    """`snakemake --profile profiles/slurm calibrate` with the executor slurm: the rule a
+    1-core coordinator job, its cases in worker jobs it submits; the same evaluations.nc as
+    `snakemake --cores 2 calibrate` with the local executor."""
+    if os.path.realpath("/etc/slurm/slurm.conf") != os.path.realpath(slurm):
+        pytest.skip("/etc/slurm/slurm.conf is another SLURM's (the plugin's steps read that path)")
+    local, cluster = (shutil.copytree(small_workflow, tmp_path / name, symlinks=True) for name in ("local", "slurm"))
+    _snakemake(local, "--cores", "2", "calibrate")
+    _edit(cluster / "config" / "config.yaml", lambda cfg: cfg.update(executor=dict(
+        kind="slurm", cores=2, memory_GB=4, walltime_min=10, maximum_jobs=2)))
+    t0 = time.time()
+    _snakemake(cluster, "--profile", "profiles/slurm", "--slurm-status-command", "squeue",
+               "--slurm-init-seconds-before-status-checks", "5", "calibrate")
+    out = Path("results/calibration/sun_et_al_16/p60_q230_f5")
+    jobs = len(list((cluster / out / "workers").glob("*.err")))
+    print(f"snakemake calibrate on slurm: {time.time() - t0:.0f} s, 1 coordinator job, {jobs} worker job(s)")
+    assert jobs >= 1
+    with xr.open_dataset(local / out / "evaluations.nc") as a, xr.open_dataset(cluster / out / "evaluations.nc") as b:
+        assert set(a.variables) == set(b.variables) and a.attrs == b.attrs
+        for name in a.variables:
+            assert np.array_equal(a[name].values, b[name].values, equal_nan=a[name].dtype.kind == "f"), name

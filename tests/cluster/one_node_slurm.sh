@@ -5,6 +5,10 @@
 #   one_node_slurm.sh start DIR   # idempotent; prints the SLURM_CONF to export
 #   one_node_slurm.sh stop DIR    # stops what `start DIR` started, nothing else
 #
+# Several test processes may share one DIR: each start counts a user, each stop one less,
+# and the last stop stops the daemons. Where no /etc/slurm/slurm.conf exists it is linked to
+# DIR's (Snakemake's jobstep plugin drops SLURM_CONF from the environment of the steps it
+# starts with srun, which then read the default path), and the link removed again.
 # Needs root and Debian's slurm-wlm and munge (apt-get install -y slurm-wlm munge); exits 3
 # saying what is missing otherwise. No accounting storage (sacct does not work: the
 # Snakemake SLURM plugin is given --slurm-status-command squeue), so MinJobAge keeps
@@ -15,17 +19,26 @@ cmd=${1:-}; dir=${2:-}
 [[ -n $cmd && -n $dir ]] || { echo "usage: $0 start|stop DIR" >&2; exit 2; }
 CPUS=${CPUS:-8}
 
+ETC=/etc/slurm/slurm.conf
+
 alive() { [[ -f $1 ]] && kill -0 "$(cat "$1")" 2>/dev/null; }
+users() { cat "$dir/users" 2>/dev/null || echo 0; }
 
 stop() {
     for pid in "$dir/slurmd.pid" "$dir/slurmctld.pid" "$dir/munged.pid"; do
         if alive "$pid"; then kill "$(cat "$pid")"; fi
         rm -f "$pid"
     done
+    if [[ -L $ETC && $(readlink "$ETC") == "$dir/slurm.conf" ]]; then rm -f "$ETC"; fi
+    echo 0 > "$dir/users"
 }
 
 if [[ $cmd == stop ]]; then
-    [[ -d $dir ]] && stop
+    [[ -d $dir ]] || exit 0
+    dir=$(cd "$dir" && pwd)
+    exec 9>"$dir/.lock"; flock 9
+    left=$(( $(users) - 1 ))
+    if (( left > 0 )); then echo "$left" > "$dir/users"; else stop; fi
     exit 0
 fi
 [[ $cmd == start ]] || { echo "usage: $0 start|stop DIR" >&2; exit 2; }
@@ -38,7 +51,9 @@ done
 mkdir -p "$dir"/{state,spool}
 dir=$(cd "$dir" && pwd)
 conf=$dir/slurm.conf
+exec 9>"$dir/.lock"; flock 9
 if alive "$dir/slurmctld.pid" && alive "$dir/slurmd.pid"; then
+    echo $(( $(users) + 1 )) > "$dir/users"
     echo "$conf"
     exit 0
 fi
@@ -48,7 +63,7 @@ stop                                    # a half-started one from before
 if ! pgrep -x munged >/dev/null; then
     [[ -f /etc/munge/munge.key ]] || { mungekey --create --keyfile=/etc/munge/munge.key; chown munge: /etc/munge/munge.key; }
     install -d -o munge -g munge -m 0755 /run/munge
-    runuser -u munge -- munged
+    runuser -u munge -- munged 9>&-
     for _ in $(seq 50); do pgrep -x munged >/dev/null && break; sleep 0.1; done
     pgrep -xn munged > "$dir/munged.pid"
 fi
@@ -84,10 +99,12 @@ NodeName=$host CPUs=$CPUS RealMemory=16000 State=UNKNOWN
 PartitionName=standard Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 EOF
 export SLURM_CONF=$conf
-slurmctld -f "$conf"
-slurmd -f "$conf"
+if [[ ! -e $ETC ]]; then mkdir -p "$(dirname "$ETC")"; ln -sfn "$conf" "$ETC"; fi
+slurmctld -f "$conf" 9>&-      # the daemons must not hold the lock
+slurmd -f "$conf" 9>&-
 for _ in $(seq 100); do
     if sinfo -h -o %t 2>/dev/null | grep -qx idle; then
+        echo 1 > "$dir/users"
         echo "$conf"
         exit 0
     fi

@@ -37,7 +37,9 @@ rule calibrate:
         backend=config["backend"],
         mapping=mapping_option("calibration"),
         mapping_settings=trigger("stress_mapping"),
-    threads: 256      # Snakemake caps it at --cores (workflow.cores breaks snakemake --report)
+    # its cases in --jobs processes here; a light coordinator where they run in the
+    # executor's workers (config executor; the SLURM profile gives it a long runtime)
+    threads: 256 if EXECUTOR.kind == "local" else 1      # Snakemake caps it at --cores
     log:
         f"{RESULTS}/logs/calibration/calibrate.log",
     shell:

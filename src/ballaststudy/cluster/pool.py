@@ -18,7 +18,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 
 import dask
 from dask_jobqueue import LSFCluster, PBSCluster, SGECluster, SLURMCluster
-from distributed import Client
+from distributed import Adaptive, Client
 from distributed import as_completed as as_done
 from distributed.scheduler import KilledWorker
 from numba.core import config as numba_config
@@ -132,10 +132,33 @@ def case_pool(spec, jobs=1, log_dir=None):
         else:
             stack.enter_context(dask.config.set({"distributed.scheduler.default-task-durations": TASK_DURATIONS}))
             cluster = stack.enter_context(jobqueue_cluster(spec, log_dir))
-            cluster.adapt(minimum_jobs=spec.minimum_jobs, maximum_jobs=spec.maximum_jobs)
+            cluster.adapt(minimum_jobs=spec.minimum_jobs, maximum_jobs=spec.maximum_jobs, Adaptive=KeepBusyJobs)
             client = Client(cluster)
         stack.callback(client.close)
         yield DaskPool(client)
+
+
+class KeepBusyJobs(Adaptive):
+    """Adaptive scaling that retires only worker jobs none of whose workers runs a task.
+    distributed's picks workers to close by count, busy or not (a round ending with one
+    case left asks for one worker, and the job running it may be the one cancelled): a
+    case's work since its last checkpoint would be lost each time, and its retries spent."""
+
+    async def workers_to_close(self, target):
+        names = await super().workers_to_close(target)
+        processing = await self.scheduler.processing()
+        info = self.cluster.scheduler_info.get("workers", {})
+        job = job_of_worker(self.cluster.worker_spec)
+        busy = {job.get(str(info[a]["name"]), str(info[a]["name"])) for a, keys in processing.items()
+                if keys and a in info}
+        return [n for n in names if job.get(str(n), str(n)) not in busy]
+
+
+def job_of_worker(worker_spec):
+    """{worker name: its job's name} of a SpecCluster's worker_spec (a job of several
+    worker processes names them by the suffixes of its group)."""
+    return {str(name) + suffix: str(name) for name, spec in worker_spec.items()
+            for suffix in spec.get("group", [""])}
 
 
 def _connect(spec):

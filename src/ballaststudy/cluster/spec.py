@@ -33,11 +33,12 @@ class ExecutorSpec:
         return ConfigError(self.file, f"executor.{key}", message)
 
 
-def executor_spec(cfg, file, kind=None, scheduler_address=None):
+def executor_spec(cfg, file, kind=None, scheduler_address=None, submit=True):
     """The checked spec of ``cfg``'s executor section, ``kind`` and ``scheduler_address``
     (the command line's, None: the config's) over it; ConfigError in one line for a kind
     that is not known, a dask executor without an address, a jobqueue one without cores,
-    memory or walltime, or whose submit command this machine lacks."""
+    memory or walltime, or (``submit``: where the stage runs) whose submit command this
+    machine lacks."""
     sec = dict(cfg.get("executor") or {})
     sec.update({k: v for k, v in (("kind", kind), ("scheduler_address", scheduler_address)) if v is not None})
     sec["job_directives"] = tuple(sec.get("job_directives") or ())
@@ -54,7 +55,7 @@ def executor_spec(cfg, file, kind=None, scheduler_address=None):
         if spec.minimum_jobs > spec.maximum_jobs:
             raise spec.error("minimum_jobs", f"{spec.minimum_jobs} must be at most executor.maximum_jobs "
                              f"({spec.maximum_jobs})")
-        if shutil.which(JOBQUEUE[spec.kind]) is None:
+        if submit and shutil.which(JOBQUEUE[spec.kind]) is None:
             raise spec.error("kind", f"{spec.kind}: its submit command {JOBQUEUE[spec.kind]} is not on "
                              f"this machine's PATH (run the stage on the cluster's login node)")
     return spec
