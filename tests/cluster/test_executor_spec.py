@@ -9,7 +9,7 @@ import pytest
 
 from ballaststudy.atomic import atomic_path, temporary_name
 from ballaststudy.cluster.guard import CONFIG_ENV, LIFETIME_ENV, checkpoint_guard
-from ballaststudy.cluster.pool import job_script, worker_lifetime_s
+from ballaststudy.cluster.pool import job_of_worker, job_script, worker_lifetime_s
 from ballaststudy.cluster.spec import ExecutorSpec, executor_spec
 from ballaststudy.config import ConfigError
 
@@ -57,6 +57,7 @@ def test_the_worker_job_asks_for_what_the_spec_says(monkeypatch):
                  "export NUMBA_NUM_THREADS=1", f"export {LIFETIME_ENV}=6660", f"export {CONFIG_ENV}=c.yaml",
                  f"cd {os.getcwd()}"):
         assert line in script, (line, script)
+    assert "--preload ballaststudy.scenario.runner" in script
     assert "--nthreads 1" in script and "--nworkers 4" in script and "--lifetime 6840s --lifetime-stagger 180s" in script
 
 
@@ -94,3 +95,11 @@ def test_temporary_names_differ_across_writers_of_one_pid(tmp_path):
     with atomic_path(tmp_path / "b.txt") as tmp:
         tmp.write_text("x")
     assert [p.name for p in tmp_path.iterdir()] == ["b.txt"]
+
+
+def test_a_job_of_several_workers_is_one_group():
+    """Adaptive scaling closes jobs: each worker process of a job maps to the job's name."""
+    spec = {"SLURMCluster-0": {"group": ["-0", "-1"]}, "SLURMCluster-1": {"group": ["-0", "-1"]}, "solo": {}}
+    assert job_of_worker(spec) == {"SLURMCluster-0-0": "SLURMCluster-0", "SLURMCluster-0-1": "SLURMCluster-0",
+                                   "SLURMCluster-1-0": "SLURMCluster-1", "SLURMCluster-1-1": "SLURMCluster-1",
+                                   "solo": "solo"}

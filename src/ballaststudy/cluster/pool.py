@@ -28,9 +28,14 @@ from .guard import LIFETIME_ENV, CONFIG_ENV
 CLUSTERS = {"slurm": SLURMCluster, "pbs": PBSCluster, "sge": SGECluster, "lsf": LSFCluster}
 # what numba compiles for, passed on to every worker: the same target, the same bits
 NUMBA_TARGET = ("NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES")
-# how long a task of each kind is taken to last before one has finished: adaptive scaling
-# asks for workers by the queued work, and distributed's default (0.5 s) would ask for one
-TASK_DURATIONS = {"run_case": "1h", "run_first_cycle": "10min"}
+# the scheduler of a jobqueue executor: how long a task of each kind is taken to last before
+# one has finished (adaptive scaling asks for workers by the queued work, and distributed's
+# default, 0.5 s, would ask for one), and one task a worker thread at a time (by default a
+# worker holds a second one queued, which another worker, idle at a round's end, waits for)
+SCHEDULER = {"distributed.scheduler.default-task-durations": {"run_case": "1h", "run_first_cycle": "10min"},
+             "distributed.scheduler.worker-saturation": 1.0}
+# imported by a worker as it starts, not inside its first case
+WORKER_PRELOAD = ("ballaststudy.scenario.runner",)
 
 
 class LocalPool:
@@ -130,7 +135,7 @@ def case_pool(spec, jobs=1, log_dir=None):
         if spec.kind == "dask":
             client = _connect(spec)
         else:
-            stack.enter_context(dask.config.set({"distributed.scheduler.default-task-durations": TASK_DURATIONS}))
+            stack.enter_context(dask.config.set(SCHEDULER))
             cluster = stack.enter_context(jobqueue_cluster(spec, log_dir))
             cluster.adapt(minimum_jobs=spec.minimum_jobs, maximum_jobs=spec.maximum_jobs, Adaptive=KeepBusyJobs)
             client = Client(cluster)
@@ -198,7 +203,8 @@ def jobqueue_cluster(spec, log_dir=None):
         cores=spec.cores, processes=spec.cores, memory=f"{spec.memory_GB:g}GB",
         walltime=f"{minutes // 60:02d}:{minutes % 60:02d}:00", queue=spec.queue, account=spec.account,
         job_extra_directives=list(spec.job_directives), job_script_prologue=worker_environment(spec),
-        worker_extra_args=["--lifetime", f"{lifetime:.0f}s", "--lifetime-stagger", f"{stagger:.0f}s"],
+        worker_extra_args=["--lifetime", f"{lifetime:.0f}s", "--lifetime-stagger", f"{stagger:.0f}s",
+                           *(a for module in WORKER_PRELOAD for a in ("--preload", module))],
         python=sys.executable, log_directory=str(log_dir) if log_dir else None)
     if spec.interface:
         options.update(interface=spec.interface, scheduler_options={"interface": spec.interface})
