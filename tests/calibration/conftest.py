@@ -12,7 +12,7 @@ from ballaststudy.rig.library import load_library
 from ballaststudy.cluster.pool import LocalPool
 
 from ..biaxial_fast import FAST_LOADING
-from ..shipped import shipped_config
+from ..shipped import ROOT, shipped_config
 from .rounds import round_of_two
 
 
@@ -62,3 +62,17 @@ def local_round(specimen, tmp_path_factory, planted_conditions):
     conditions = _planted_conditions(folder / "t.yaml", 60.0)
     at, files = round_of_two(specimen, config, conditions, folder / "local", LocalPool(2))
     return config, conditions, at, files
+
+
+@pytest.fixture
+def measured_target(tmp_path):
+    """(conditions YAML, imported netCDF) of the shipped target sun_et_al_16/p60_q230_f5,
+    imported from the shared measured data (skipped where they are not)."""
+    from ballaststudy.measured.importer import measured_dataset, write_test
+    test = ROOT / "config" / "measured" / "sun_et_al_16" / "p60_q230_f5.yaml"
+    data_dir = ROOT / "../shared/data/measured"
+    if not data_dir.is_dir():
+        pytest.skip("the shared measured data are not here")
+    measured = tmp_path / "m.nc"
+    write_test(measured_dataset(test, data_dir), measured)
+    return test, measured

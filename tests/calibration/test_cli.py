@@ -66,16 +66,10 @@ def test_snakefile_refuses_a_target_that_is_no_test(tmp_path):
     assert "config.yaml: calibration.targets[0]: 'nobody/nothing' is not a measured test" in lines[0]
 
 
-def test_calibrate_checks_before_any_case(tmp_path, capsys):
+def test_calibrate_checks_before_any_case(measured_target, tmp_path, capsys):
     """K specimens must match calibration.cases; the measured points must reach into the
     simulated cycles; nothing is written then."""
-    from ballaststudy.measured.importer import measured_dataset, write_test
-    test = ROOT / "config" / "measured" / "sun_et_al_16" / "p60_q230_f5.yaml"
-    data_dir = ROOT / "../shared/data/measured"
-    if not data_dir.is_dir():
-        pytest.skip("the shared measured data are not here")
-    measured = tmp_path / "m.nc"
-    write_test(measured_dataset(test, data_dir), measured)
+    test, measured = measured_target
     out = tmp_path / "cal"
     for change, argv_specimens, key in (
             (lambda c: c.update(cases=2), ["a.nc"], "calibration.cases: 2 but 1 specimens given"),

@@ -16,7 +16,7 @@ from distributed import Client, LocalCluster
 from ballaststudy.cli import main
 from ballaststudy.cluster.pool import DaskPool
 
-from ..shipped import ROOT, shipped_config
+from ..shipped import shipped_config
 from .rounds import checkpointed_case, round_of_two, same_cases
 
 
@@ -59,16 +59,10 @@ def test_a_worker_killed_mid_case_is_survived(specimen, local_round, cluster, tm
     same_cases(files, files_dask)
 
 
-def test_a_scheduler_that_does_not_answer_is_refused(specimen, tmp_path, capsys):
+def test_a_scheduler_that_does_not_answer_is_refused(specimen, measured_target, tmp_path, capsys):
     """`ballaststudy calibrate --executor dask` at a port nobody listens on: one line naming
     the key, exit 2, within the connect timeout, no case run."""
-    from ballaststudy.measured.importer import measured_dataset, write_test
-    test = ROOT / "config" / "measured" / "sun_et_al_16" / "p60_q230_f5.yaml"
-    data_dir = ROOT / "../shared/data/measured"
-    if not data_dir.is_dir():
-        pytest.skip("the shared measured data are not here")
-    measured = tmp_path / "m.nc"
-    write_test(measured_dataset(test, data_dir), measured)
+    test, measured = measured_target
     config = shipped_config(tmp_path / "config.yaml", lambda cfg: cfg.update(executor=dict(connect_timeout_s=3)))
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -166,6 +166,10 @@ def test_editing_form_settings_reruns_every_database(study):
     ("config.yaml", lambda c: _loading(c).update(cycles="ten"), "rig.box.loading.cycles: 'ten' is not allowed; "
      "allowed: an integer >= 1"),
     ("config.yaml", lambda c: c.clear(), "seed: missing"),
+    ("config.yaml", lambda c: c.update(executor={"kind": "condor"}), "executor.kind: 'condor' is not allowed"),
+    ("config.yaml", lambda c: c.update(executor={"kind": "dask"}), "executor.scheduler_address: missing"),
+    ("config.yaml", lambda c: c.update(executor={"kind": "slurm", "cores": 4, "walltime_min": 60}),
+     "executor.memory_GB: missing"),
 ])
 def test_bad_config_is_rejected_before_any_job(study, file, change, key):
     """One line naming file and key, exit 2, no traceback (Snakemake shows our message)."""
