@@ -23,6 +23,7 @@ from .provenance import Recorder
 from .provenance.store import lineage, load_records, verify, write_store
 from .bpm.cli import register as register_bpm
 from .calibration.cli import check_targets, register as register_calibrate
+from .cluster.spec import executor_spec
 from .loop.cli import register as register_loop
 from .loop.horizon_cli import register as register_horizon
 from .measured.cli import register as register_measured
@@ -117,6 +118,7 @@ def _config_check(args):
     for test in tests:
         load_conditions(test)
     check_targets(cfg, args.config, [str(t.relative_to(tests_dir).with_suffix("")) for t in tests])
+    executor_spec(cfg, args.config, submit=False)
     print(f"{args.config}: ok ({len(names)} databases: {', '.join(names)}; {len(tests)} measured tests)")
 
 

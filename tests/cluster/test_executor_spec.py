@@ -8,10 +8,13 @@ import shutil
 import pytest
 
 from ballaststudy.atomic import atomic_path, temporary_name
+from ballaststudy.cli import main
 from ballaststudy.cluster.guard import CONFIG_ENV, LIFETIME_ENV, checkpoint_guard
 from ballaststudy.cluster.pool import job_of_worker, job_script, worker_lifetime_s
 from ballaststudy.cluster.spec import ExecutorSpec, executor_spec
 from ballaststudy.config import ConfigError
+
+from ..shipped import shipped_config
 
 SLURM = dict(kind="slurm", cores=4, memory_GB=8, walltime_min=120)
 
@@ -103,3 +106,15 @@ def test_a_job_of_several_workers_is_one_group():
     assert job_of_worker(spec) == {"SLURMCluster-0-0": "SLURMCluster-0", "SLURMCluster-0-1": "SLURMCluster-0",
                                    "SLURMCluster-1-0": "SLURMCluster-1", "SLURMCluster-1-1": "SLURMCluster-1",
                                    "solo": "solo"}
+
+
+def test_config_check_refuses_a_bad_executor(tmp_path, capsys):
+    """`ballaststudy config check` reads the executor as the Snakefile does (its batch system
+    is looked for only where the stage runs)."""
+    config = shipped_config(tmp_path / "c.yaml", lambda cfg: cfg.update(executor={"kind": "pbs", "cores": 2}))
+    assert main(["config", "check", "--config", str(config)]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and f"{config}: executor.memory_GB: missing" in line, line
+    config = shipped_config(tmp_path / "c.yaml", lambda cfg: cfg.update(
+        executor={"kind": "pbs", "cores": 2, "memory_GB": 4, "walltime_min": 60}))
+    assert main(["config", "check", "--config", str(config)]) == 0
