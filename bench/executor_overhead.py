@@ -23,7 +23,7 @@ import numpy as np
 from distributed import Client, LocalCluster
 
 from ballaststudy.calibration.evaluate import Evaluator
-from ballaststudy.cluster.pool import SCHEDULER, WORKER_PRELOAD, DaskPool, LocalPool
+from ballaststudy.cluster.pool import SCHEDULER, WORKER_CONFIG, WORKER_PRELOAD, DaskPool, LocalPool
 
 
 def main():
@@ -44,7 +44,7 @@ def main():
             started = time.perf_counter()
             _round(args, thetas, out, LocalPool(args.cores))
         else:
-            with dask.config.set(SCHEDULER), LocalCluster(
+            with dask.config.set({**SCHEDULER, **WORKER_CONFIG}), LocalCluster(
                     n_workers=args.cores, threads_per_worker=1, processes=True, dashboard_address=None,
                     preload=list(WORKER_PRELOAD)) as cluster, Client(cluster) as client:
                 started = time.perf_counter()

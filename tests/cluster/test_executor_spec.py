@@ -57,7 +57,8 @@ def test_the_worker_job_asks_for_what_the_spec_says(monkeypatch):
     script = job_script(spec)
     for line in ("#SBATCH -n 1", "#SBATCH --cpus-per-task=4", "#SBATCH -t 02:00:00", "#SBATCH -p short",
                  "#SBATCH -A rail", "#SBATCH --exclusive", "export NUMBA_CPU_NAME=generic",
-                 "export NUMBA_NUM_THREADS=1", f"export {LIFETIME_ENV}=6660", f"export {CONFIG_ENV}=c.yaml",
+                 "export NUMBA_NUM_THREADS=1", "export DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False",
+                 "export DASK_DISTRIBUTED__WORKER__MEMORY__MONITOR_INTERVAL=10s", f"export {LIFETIME_ENV}=6660", f"export {CONFIG_ENV}=c.yaml",
                  f"cd {os.getcwd()}"):
         assert line in script, (line, script)
     assert "--preload ballaststudy.scenario.runner" in script

@@ -36,6 +36,15 @@ SCHEDULER = {"distributed.scheduler.default-task-durations": {"run_case": "1h", 
              "distributed.scheduler.worker-saturation": 1.0}
 # imported by a worker as it starts, not inside its first case
 WORKER_PRELOAD = ("ballaststudy.scenario.runner",)
+# a worker's own periodic work, slowed: it takes the GIL from the case it runs (a case ran
+# ~4 % slower in a worker than in a pool process, ~2 % with these; bench/executor_overhead.py)
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker.memory.monitor-interval": "10s",
+                 "distributed.admin.tick.interval": "10s", "distributed.admin.system-monitor.interval": "10s"}
+
+
+def dask_environment(config):
+    """{environment variable: value} that set dask ``config`` keys in a new process."""
+    return {"DASK_" + key.upper().replace(".", "__").replace("-", "_"): str(value) for key, value in config.items()}
 
 
 class LocalPool:
@@ -184,12 +193,13 @@ def worker_lifetime_s(walltime_min):
 
 
 def worker_environment(spec):
-    """The exports of a worker job: one numba thread, this process' CPU target, how long
-    the worker lives (the checkpoint guard reads it) and the config's name, run in this
+    """The exports of a worker job: one numba thread, this process' CPU target, the worker's
+    quieter periodic work, how long the worker lives (the checkpoint guard reads it) and the
+    config's name, run in this
     process' folder (relative paths as here; PBS starts jobs in $HOME)."""
     lifetime, stagger = worker_lifetime_s(spec.walltime_min)
     env = {"NUMBA_NUM_THREADS": "1", LIFETIME_ENV: f"{lifetime - stagger:.0f}", CONFIG_ENV: spec.file,
-           **{k: os.environ[k] for k in NUMBA_TARGET if k in os.environ}}
+           **{k: os.environ[k] for k in NUMBA_TARGET if k in os.environ}, **dask_environment(WORKER_CONFIG)}
     return [f"cd {shlex.quote(os.getcwd())}"] + [f"export {k}={shlex.quote(v)}" for k, v in env.items()]
 
 
