@@ -76,10 +76,12 @@ every single test is better predicted. The signed-rank test asks what we mean - 
 held-out prediction, condition after condition - and needs at least 6 tests to reach
 0.05 / 3 (all 7 positive: p = 1/128)."""
 import numpy as np
+from scipy.special import logsumexp
 from scipy.stats import wilcoxon
 
-from ..calibration.bayes import (HeldOut, Surrogate, _box, ensemble_stats, held_out, noise_covariances,
-                                 per_test_loglik, prior_samples, shrunk, weighted_fit)
+from ..calibration.bayes import (HeldOut, Surrogate, _box, ensemble_stats, noise_covariances, prior_samples, shrunk,
+                                 weighted_fit)
+from .discrepancy import Discrepancy, held_out_variance, joint_loglik
 
 ALPHA = 0.05          # family-wise level of the rule over the candidates
 # a per-test gain below half a nat (a Bayes factor under 1.65, "not worth more than a bare
@@ -136,53 +138,85 @@ def likelihood_words(dof):
     return f"multivariate t with dof = {dof:g}"
 
 
-def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof):
-    """(prior samples (M, d), surrogate means (M, P), log-likelihood per test (M, T))."""
+def independent_tests(point_test):
+    """The likelihood before issue 75: every test its own source, no discrepancy term (each
+    test's residual a t of its own)."""
+    tests = np.unique(point_test)
+    return Discrepancy(np.zeros((len(point_test), 0)), np.arange(len(tests)), np.zeros((len(tests), 0)),
+                       tuple(map(str, tests)), ())
+
+
+def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof, disc):
+    """(prior samples (M, d), surrogate means (M, P), discrepancy.JointLoglik)."""
     lower, upper = _box(lower, upper)
     surrogate = Surrogate(lower, upper, seed).fit(thetas, [c.mean(axis=0) for c in curves_list],
                                                   groups=point_test)      # one GP per test
     samples = prior_samples(lower, upper, n_samples, seed)
     mean, sd = surrogate.predict(samples)
-    return samples, mean, per_test_loglik(mean, sd, np.asarray(y, float), point_test, covs, dof)
+    return samples, mean, joint_loglik(np.asarray(y, float)[None] - mean, sd, covs, point_test, disc, dof)
 
 
-def _fit(samples, loglik):
-    return weighted_fit(samples, loglik.sum(axis=1))[1:]
+def held_out_joint(samples, mean, joint, point_test, disc):
+    """HeldOut from prior samples (M, d), the model's mean at them (M, P) and their
+    discrepancy.JointLoglik: for each test, the posterior from the other tests, the log
+    predictive density of the test given them, and its prediction: the weighted mean curve
+    plus the discrepancy the other tests of its source estimate."""
+    tests = np.unique(point_test)
+    lpd, predicted = np.empty(len(tests)), np.empty(mean.shape[1])
+    theta_mean = np.empty((len(tests), samples.shape[1]))
+    for j, t in enumerate(tests):
+        log_w = joint.without[:, j] - logsumexp(joint.without[:, j])
+        lpd[j] = logsumexp(log_w + joint.held_out[:, j])
+        w = np.exp(log_w)
+        sel = point_test == t
+        predicted[sel] = w @ (mean[:, sel] + joint.beta_without[:, j] @ disc.basis[sel].T)
+        theta_mean[j] = w @ samples
+    return HeldOut(lpd, predicted, theta_mean)
 
 
-def judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None):
-    """(held_out_candidate, fit_all) of a candidate from one surrogate fit."""
+def judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None,
+                    disc=None):
+    """(held_out_candidate, fit_all) of a candidate from one surrogate fit; disc: the
+    discrepancy.Discrepancy (None: independent_tests)."""
     y, point_test = np.asarray(y, float), np.asarray(point_test)
-    samples, mean, loglik = _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof)
-    return held_out(samples, mean, loglik, y, point_test), _fit(samples, loglik)
+    disc = disc or independent_tests(point_test)
+    samples, mean, joint = _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof,
+                                    disc)
+    return held_out_joint(samples, mean, joint, point_test, disc), weighted_fit(samples, joint.full)[1:]
 
 
-def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None):
+def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None,
+                       disc=None):
     """HeldOut of a candidate from its evaluated sets (thetas (J, d), curves (K_j, P));
     covs: residual_covariances' first (the noise every candidate is judged under), dof its
     residual_dof."""
-    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof)[0]
+    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof, disc)[0]
 
 
-def fit_all(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None):
+def fit_all(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None, disc=None):
     """The candidate's parameter(s) from every test: posterior mean, 90 % interval (d, 2),
     effective sample size, with the same likelihood as the held-out densities."""
-    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof)[1]
+    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof, disc)[1]
 
 
-def held_out_plain(curves, y, point_test, covs, dof=None):
-    """HeldOut of the plain model: its ensemble (K, P) as it is (nothing fitted, so the
-    held-out density is the density)."""
-    curves = np.asarray(curves, float)
-    mean = curves.mean(axis=0)
-    loglik = per_test_loglik(mean[None], np.zeros((1, len(mean))), np.asarray(y, float), point_test, covs, dof)
-    return HeldOut(loglik[0], mean, np.zeros((loglik.shape[1], 0)))
+def held_out_plain(curves, y, point_test, covs, dof=None, disc=None):
+    """HeldOut of the plain model: its ensemble (K, P) as it is (nothing fitted; a held-out
+    test still gets the discrepancy its source's other tests estimate)."""
+    curves, point_test = np.asarray(curves, float), np.asarray(point_test)
+    disc = disc or independent_tests(point_test)
+    mean = curves.mean(axis=0)[None]
+    joint = joint_loglik(np.asarray(y, float)[None] - mean, np.zeros_like(mean), covs, point_test, disc, dof)
+    return held_out_joint(np.zeros((1, 0)), mean, joint, point_test, disc)
 
 
-def scatter_mse(covs):
-    """The squared residual a correct model expects, pooled over every point: the mean of the
-    noise covariances' diagonals ({test: covariance}, residual_covariances' plain ones)."""
-    return float(np.concatenate([np.diag(c) for c in covs.values()]).mean())
+def scatter_mse(covs, point_test=None, disc=None):
+    """The squared residual a correct model expects on a held-out test, pooled over every
+    point: the noise covariances' diagonals ({test: covariance}, residual_covariances' plain
+    ones) plus, with a discrepancy, what the other tests leave of it
+    (discrepancy.held_out_variance)."""
+    if disc is None or not disc.q:
+        return float(np.concatenate([np.diag(c) for c in covs.values()]).mean())
+    return float(held_out_variance(covs, point_test, disc).mean())
 
 
 def choose(pairs, y, scatter):
