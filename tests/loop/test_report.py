@@ -18,7 +18,9 @@ from ballaststudy.loop.markdown import _verdict_of, report_markdown
 from ballaststudy.loop.outcome import LoopRun, PlainModel, Selection, Targets
 from ballaststudy.loop.plots import _panel, plot_curves
 from ballaststudy.loop.report import chosen_doc
-from ballaststudy.loop.select import ALPHA, HeldOut
+from ballaststudy.loop.discrepancy import make_discrepancy
+from ballaststudy.loop.select import ALPHA, HeldOut, NoiseModel, Sampled, scatter_mse
+from ballaststudy.loop.trust import detectable, discrepancy_rows, verdict
 from ballaststudy.loop.accumulation import LawFit
 from ballaststudy.loop.horizon import LongTermLaw
 from ballaststudy.loop.statistics import LongTerm, LoopStatistics, candidate_rows, long_term, step_models
@@ -29,7 +31,8 @@ import matplotlib.pyplot as plt  # noqa: E402 (after the backend)
 
 SETTINGS = dict(quantity="axial_strain", cycles=3, cases=2, effects=["end_restraint", "fouling"], design_sets=2,
                 refine_rounds=0, refine_sets=2,
-                specimen_share=1.0, measurement_sd=1e-4)
+                specimen_share=1.0, measurement_sd=1e-4, discrepancy_terms=["offset"],
+                discrepancy_prior_sd_share=1.0)
 TARGETS = Targets(["conditions/a.yaml", "conditions/b.yaml"], ["a.nc", "b.nc"],
               [(np.array([1.0, 2.0, 3.0]), np.array([0.001, 0.002, 0.0025])), (np.array([1.0, 3.0]), np.array([0.001, 0.003]))])
 
@@ -88,19 +91,28 @@ def _chosen_run():
                    failed=[[False, False]] * 2)
               for i in range(2)]          # (their tests differ only in what cycle 0 does not read)
     held = HeldOut(np.array([1.0, 2.0]), TARGETS.y + 1e-4, np.zeros((2, 1)))
+    samples = np.linspace(0.0, 1.2, 16)[:, None]
+    curves = TARGETS.y + 1e-4 * (samples - 0.3)                     # the surrogate: linear in the parameter
+    sampled = Sampled(samples, curves, np.zeros_like(curves), np.full(16, 1 / 16))
     candidate = Candidate(np.array([[0.0], [1.2]]), [], held, (np.array([0.3]), np.array([[0.2, 0.4]]), 100.0),
-                          SimpleNamespace(sets=design + [after]))
+                          sampled, SimpleNamespace(sets=design + [after]))
     evidence = dict(gain=5.0, se=1.0, z=5.0, wins=2, tests=2, p=0.01, mse_cut=4e-8, scatter_mse=1e-8)
     selection = Selection({"end_restraint": candidate}, {"end_restraint": evidence}, "end_restraint", after, ["fouling"])
     plain_model = PlainModel(plain, TARGETS.y + 2e-4, HeldOut(np.array([0.5, 1.5]), TARGETS.y + 2e-4, np.zeros((2, 0))))
-    run = LoopRun(SETTINGS, TARGETS, plain_model, selection, {}, minutes=0.5, likelihood_dof=1.0)
+    covs = {t: 1e-8 * np.eye(int(np.sum(TARGETS.point_test == t))) for t in range(2)}
+    disc = make_discrepancy(TARGETS.y, TARGETS.point_cycle, TARGETS.point_test, ["planted", "planted"],
+                            SETTINGS["discrepancy_terms"])
+    noise = NoiseModel(covs, covs, disc, 1.0, scatter_mse(covs, TARGETS.point_test, disc))
+    run = LoopRun(SETTINGS, TARGETS, plain_model, selection, {}, minutes=0.5, likelihood_dof=1.0, noise=noise)
     rows = [dict(test=name, source="planted", points=3, rmse=2e-4 * (j + 1), bias=1e-4, bias_p=0.5, slope_ln_n=0.0,
                  slope_p=np.nan) for j, name in enumerate(TARGETS.names)]
     no_fit = LongTerm(np.zeros(0), np.zeros(0), np.zeros(0), None)
     step = step_rows(TARGETS.names, WHOLE, step_models(run), 3, 1e-4)
+    detect = detectable(run)
     stats = LoopStatistics(rows, [r | dict(rmse=1e-4) for r in rows], [], candidate_rows(selection, TARGETS),
                            [no_fit] * 2, [no_fit] * 2, rmse(TARGETS.y, plain_model.prediction), step,
-                           shared_runs(plain["cases"]))
+                           shared_runs(plain["cases"]), discrepancy_rows(run), detect,
+                           verdict("end_restraint", detect, ["end_restraint"]))
     return run, stats
 
 
@@ -116,7 +128,8 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert run.dem_first_loadings == 2 * (1 + 2 + 1 + 1)    # the design sets' tests their cycle 0
     assert stats.after_rmse == pytest.approx(1e-4) and stats.chosen_row["effect"] == "end_restraint"
     assert stats.candidates[0]["held_out_rmse"] == pytest.approx(1e-4)
-    assert chosen_doc(stats, {}) == {"effect": "end_restraint", "parameters": {"platen_friction": 0.3},
+    assert chosen_doc(stats, {}) == {"effect": "end_restraint", "verdict": "chosen",
+                                     "parameters": {"platen_friction": 0.3},
                                      "interval90": {"platen_friction": [0.2, 0.4]}, "material_parameters": "table_4_2",
                                      "stress_mapping": "none"}
     ds = loop_dataset(run, stats)
@@ -126,11 +139,14 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert ds.attrs["stress_mapping"] == "none"
     assert ds.attrs["likelihood"] == "multivariate t with dof = 1"      # K - 1, K = 2 specimens
     text = report_markdown(run, stats)
+    assert text.splitlines()[2] == "**Verdict: Effect chosen: end_restraint.**"
+    assert "| planted | plain |" in text and "| planted | end_restraint |" in text
+    assert ds.attrs["verdict_class"] == "chosen" and json.loads(ds.attrs["discrepancy_json"])[0]["source"] == "planted"
     assert "Stress mapping: **none**" in text
     assert "likelihood: multivariate t with dof = 1 (K - 1:" in text
     assert "16 DEM cases, 14 runs from 10 first loadings (" in text and "; 0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
-    assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] |" in text
-    assert "| 0.01 | 2 | chosen |" in text                   # held-out RMSE, cut / scatter sqrt(4), verdict
+    assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] (0.19) |" in text
+    assert "| 0.01 | 2 | - | chosen |" in text     # held-out RMSE, cut / scatter sqrt(4), detectable (2 tests: never), verdict
     assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text
     assert "No accumulation law given" in text and ds.attrs["long_term_law"] == "none"
     assert "N = 1 -> 3 (100 -> 2000 cut at the 3 cycles simulated" in text
@@ -174,8 +190,12 @@ def test_no_effect_chosen():
     run = dataclasses.replace(run, selection=Selection(run.selection.candidates, run.selection.evidence))
     stats = dataclasses.replace(stats, after=None, candidates=candidate_rows(run.selection, TARGETS),
                                 long_term_after=None, step=[r | dict(models={"plain": r["models"]["plain"]})
-                                                            for r in stats.step])
-    assert chosen_doc(stats, {"mu": 0.5}) == {"effect": "none", "parameters": {}, "interval90": {},
+                                                            for r in stats.step],
+                                verdict=verdict(None, stats.detectable, ["end_restraint"]))
+    assert stats.verdict[0] == "cannot tell"         # two tests: the signed-rank test can never pass
+    assert "**Verdict: These data cannot tell" in report_markdown(run, stats)
+    assert chosen_doc(stats, {"mu": 0.5}) == {"effect": "none", "verdict": "cannot tell", "parameters": {},
+                                              "interval90": {},
                                               "material_parameters": {"mu": 0.5}, "stress_mapping": "none"}
     assert "after" not in loop_dataset(run, stats) and "**No effect chosen**" in report_markdown(run, stats)
     assert "end_restraint 1 -> 3" not in report_markdown(run, stats)

@@ -39,10 +39,12 @@ from ..cluster.spec import executor_spec
 from ..scenario.runner import check_backend
 from ..scenario.scenario import check_stone_model, splitting_of
 from ..stones import DEFAULT
+from .discrepancy import make_discrepancy, source_name
 from .horizon import chosen_for
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
-from .select import choose, held_out_plain, judge_candidate, residual_covariances, residual_dof, scatter_mse
+from .select import (NoiseModel, choose, held_out_plain, judge_candidate, residual_covariances, residual_dof,
+                     scatter_mse)
 
 # the chaos probe's velocity perturbation (specimen_share 0): far below any physical speed
 # of the test; the chaos it starts is saturated - runs perturbed by 1e-9, 1e-6 and 1e-4 m/s
@@ -134,13 +136,14 @@ class Candidate:
     at: list                 # J arrays (K, P): its cases at the measured points
     held: object             # select.HeldOut of the candidate
     fit: tuple               # select.fit_all: (mean (d,), interval90 (d, 2), ess)
+    sampled: object          # select.Sampled: its surrogate over the prior sample, the posterior
     evaluate: object         # its calibration.evaluate.Evaluator (sets: every run, design first)
 
 
-def _refine(runs, plain_at, probe_at, y, point_test, lp, seed, dof):
+def _refine(runs, plain_at, probe_at, y, point_test, lp, seed, dof, disc):
     """_judge after ``refine_rounds`` rounds of refined_design sets added to every
     candidate's runs (in place; the grid's spacing halved each round)."""
-    candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof)
+    candidates, plain, noise = _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof, disc)
     for r in range(lp["refine_rounds"]):
         for name, (thetas, at, evaluate) in runs.items():
             lower, upper = _bounds(name)
@@ -148,22 +151,23 @@ def _refine(runs, plain_at, probe_at, y, point_test, lp, seed, dof):
             new = refined_design(candidates[name].held.theta_mean, lower, upper, spacing, lp["refine_sets"],
                                  job_seed(seed, f"loop/{name}/refine{r}"))
             runs[name] = (np.vstack([thetas, new]), at + evaluate(new), evaluate)
-        candidates, plain, scatter = _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof)
-    return candidates, plain, scatter
+        candidates, plain, noise = _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof, disc)
+    return candidates, plain, noise
 
 
-def _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof):
-    """({effect: Candidate}, the plain model's select.HeldOut, its scatter_mse): every
+def _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof, disc):
+    """({effect: Candidate}, the plain model's select.HeldOut, select.NoiseModel): every
     candidate and the plain model under one noise model, made from the plain runs
-    (select.residual_covariances), its t with ``dof`` degrees of freedom."""
+    (select.residual_covariances), its t with ``dof`` degrees of freedom, and one
+    discrepancy per source (discrepancy.Discrepancy ``disc``)."""
     covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
                                             probe_at)
-    plain = held_out_plain(plain_at, y, point_test, plain_covs, dof)
+    plain = held_out_plain(plain_at, y, point_test, plain_covs, dof, disc)
     out = {}
     for name, (thetas, at, evaluate) in runs.items():
-        args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed, dof)
+        args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed, dof, disc)
         out[name] = Candidate(thetas, at, *judge_candidate(*args), evaluate)
-    return out, plain, scatter_mse(plain_covs)
+    return out, plain, NoiseModel(covs, plain_covs, disc, dof, scatter_mse(plain_covs, point_test, disc))
 
 
 def _long_term_law(path, lp):
@@ -216,8 +220,10 @@ def _loop(args):
         untestable = [e for e in lp["effects"] if not MODIFIERS[e].testable(conditions)]
         runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
         dof = residual_dof(len(plain_at), lp["specimen_share"])      # the loop runs one chaos probe
-        candidates, plain, scatter = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"], dof)
-        chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, scatter)
+        disc = make_discrepancy(y, targets.point_cycle, point_test, [source_name(c) for c in conditions],
+                                lp["discrepancy_terms"], lp["discrepancy_prior_sd_share"])
+        candidates, plain, noise = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"], dof, disc)
+        chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, noise.scatter)
         after = None
         if chosen:
             best = candidates[chosen]
@@ -228,7 +234,7 @@ def _loop(args):
         lp, targets,
         PlainModel(plain_eval.sets[0], plain_at.mean(axis=0), plain, probe_set),
         Selection(candidates, evidence, chosen, after, untestable), base, minutes=(time.time() - t0) / 60,
-        likelihood_dof=dof, long_term_law=long_term_law, mapping=plain_eval.mapping_records()))
+        likelihood_dof=dof, long_term_law=long_term_law, mapping=plain_eval.mapping_records(), noise=noise))
     recorder.finish()
     sets = plain_eval.sets + (probe_eval.sets if probe_eval else []) + [st for c in candidates.values() for st in c.evaluate.sets]
     cases = [f for st in sets for per_test in st["cases"] for f in per_test]  # this run's sets

@@ -64,6 +64,12 @@ class Discrepancy:
         return self.basis.shape[1]
 
 
+def source_name(conditions):
+    """The source study of a test (its conditions' ``source`` up to the first comma): what
+    its tests share."""
+    return conditions["source"].split(",")[0]
+
+
 def make_discrepancy(y, point_cycle, point_test, test_sources, terms=TERMS, prior_sd_share=1.0):
     """The Discrepancy of measured points y (P,) at cycles point_cycle (P,) of tests
     point_test (P,) from the sources test_sources (T,) names; ``terms`` a prefix of TERMS

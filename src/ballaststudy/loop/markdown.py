@@ -17,6 +17,7 @@ def report_markdown(run, stats):
     scale, unit = display_scale(run.settings["quantity"])
     lines = (_opening(run, stats, unit) + _dem_horizon(stats, scale) + _covariates(stats)
              + _candidates(run, stats, scale, unit) + _verdict(run, stats, scale, unit)
+             + _discrepancy(run, stats, scale, unit)
              + _step(run, stats, scale, unit) + _long_term(run, stats, scale, unit))
     return "\n".join(lines) + "\n"
 
@@ -32,7 +33,8 @@ def _opening(run, stats, unit):
                if lp["refine_rounds"] else "")
     effects = (f"{len(stats.candidates)} candidate effects at {lp['design_sets']} parameter sets each{refined}"
                if stats.candidates else "no candidate effect run")
-    return ["# Closing the loop with measured data", "",
+    head = [f"**Verdict: {stats.verdict[1]}**", ""] if stats.verdict[1] else []
+    return ["# Closing the loop with measured data", "", *head,
             f"{len(stats.before)} tests, {lp['cases']} specimens per model and test, {lp['cycles']} simulated cycles "
             f"(the DEM horizon); {effects}; "
             f"{run.dem_cases} DEM cases, {run.dem_runs} runs from {run.dem_first_loadings} first loadings (a case "
@@ -119,16 +121,59 @@ def _candidates(run, stats, scale, unit):
              "mean squared error minus the effect's exceeds the squared residual a correct model expects under "
              "the noise model (shown as the cut's root over the scatter's); the largest gain among the passing "
              "is chosen.", "",
-             "| effect | parameter: fitted mean [90 %] | gain | SE | tests better | p | held-out RMSE "
-             "| cut / scatter | verdict |", "|---|---|---|---|---|---|---|---|---|"]
+             "Interval: the 90 % posterior interval, its width over the prior's 90 % (1: the data said "
+             "nothing), marked where it runs into an edge of the design range (the data ask for more than the "
+             "range allows: no estimate). Detectable: the smallest rms effect the rule chooses on this design's "
+             "expected data (loop/trust.py; - none in the range).", "",
+             "| effect | parameter: fitted mean [90 %] (width / prior's) | gain | SE | tests better | p | held-out RMSE "
+             "| cut / scatter | detectable from | verdict |", "|---|---|---|---|---|---|---|---|---|---|"]
+    detect = stats.detectable or {}
     for c in cands:
-        par = ", ".join(f"{n} {m:.3g} [{lo:.3g}, {hi:.3g}]" for n, m, (lo, hi) in zip(c["parameters"], c["mean"], c["interval90"]))
+        par = ", ".join(_interval_words(n, m, iv, note) for n, m, iv, note in
+                        zip(c["parameters"], c["mean"], c["interval90"], c.get("interval_notes") or [{}] * 9))
+        smallest = detect.get(c["effect"], {}).get("smallest", np.nan)
         lines.append(f"| {c['effect']} | {par} | {c['gain']:.3g} | {c['se']:.3g} | {c['wins']}/{c['tests']} | "
                      f"{_fmt_p(c['p'])} | {scale * c['held_out_rmse']:.3g} | {_cut_words(c)} | "
+                     f"{'-' if not np.isfinite(smallest) else f'{scale * smallest:.3g}'} | "
                      f"{_verdict_of(c, len(cands))} |")
     lines += [f"| {e} | - | - | - | - | - | - | - | not testable: no target declares {MODIFIERS[e].covariate} "
               "(its runs would be the plain model's), not run |" for e in run.selection.untestable]
     return lines + ["", f"Plain model RMSE over all points: {scale * stats.plain_rmse:.3g} {unit} (nothing fitted: fitted = held out).", ""]
+
+
+def _interval_words(name, mean, interval, note):
+    lo, hi = interval
+    text = f"{name} {mean:.3g} [{lo:.3g}, {hi:.3g}]"
+    if note:
+        text += f" ({note['width_share']:.2f})"
+        if note["at_edge"]:
+            text += f" **at the {note['at_edge']} edge of its range**"
+    return text
+
+
+def _discrepancy(run, stats, scale, unit):
+    """The discrepancy per source beside each effect's size."""
+    if not stats.discrepancy:
+        return []
+    terms = stats.discrepancy[0]["terms"]
+    if not terms:
+        return ["## The discrepancy", "", "None estimated (`loop.discrepancy_terms: []`): every test is judged on "
+                "its own, and what all tests of a source share counts once per test.", ""]
+    lines = ["## The discrepancy: what the measured tests of one source share and the model lacks", "",
+             "Per source, " + " and ".join(t.replace("_", " ") for t in terms) + " shared by all its tests, "
+             "estimated with each model's parameters (loop/discrepancy.py; prior sd "
+             f"{run.settings['discrepancy_prior_sd_share']:g} x the source's measured rms). Size: its rms over the "
+             "source's points; effect: the rms of the candidate's fitted curve minus the plain model's. An effect "
+             "smaller than the discrepancy beside it explains less than what the source shares.", "",
+             "| source | model | " + " | ".join(f"{t} (sd)" for t in terms) + " | discrepancy size | effect size |",
+             "|---|---|" + "---|" * len(terms) + "---|---|"]
+    for row in stats.discrepancy:
+        models = {"plain": row["plain"], **row["candidates"]}
+        for name, e in models.items():
+            cells = " | ".join(f"{scale * m:.3g} ({scale * sd:.2g})" for m, sd in zip(e["mean"], e["sd"]))
+            effect = f"{scale * e['effect_size']:.3g}" if "effect_size" in e else "-"
+            lines.append(f"| {row['source']} | {name} | {cells} | {scale * e['size']:.3g} | {effect} |")
+    return lines + ["", f"In {unit} (slope: per unit ln N).", ""]
 
 
 def _verdict(run, stats, scale, unit):

@@ -67,6 +67,7 @@ class LoopRun:
     likelihood_dof: float      # the likelihood's t degrees of freedom (select.residual_dof)
     long_term_law: object = None   # horizon.LongTermLaw the measured curves chose; None: none given
     mapping: dict = None       # {test: the stress mapping's record} (scenario.mapping); None: none
+    noise: object = None       # select.NoiseModel every model was judged under
 
     @property
     def cycles(self):

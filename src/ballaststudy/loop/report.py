@@ -28,11 +28,11 @@ def write_outputs(out, run):
 
 
 def chosen_doc(stats, base, mapping=None):
-    """chosen.yaml: the effect chosen (or none), its fitted parameters and 90 % intervals, the
+    """chosen.yaml: the effect chosen (or none), the verdict's class, its fitted parameters and 90 % intervals, the
     material parameters it was fitted on and the stress mapping ({test: record}) the tests
     ran under."""
     row = stats.chosen_row
-    return {"effect": row["effect"] if row else "none",
+    return {"effect": row["effect"] if row else "none", "verdict": stats.verdict[0],
             "parameters": dict(zip(row["parameters"], row["mean"])) if row else {},
             "interval90": dict(zip(row["parameters"], row["interval90"])) if row else {},
             "material_parameters": base or "table_4_2",

@@ -75,6 +75,8 @@ lot at the high end, and that spread alone keeps z below 2 with a handful of tes
 every single test is better predicted. The signed-rank test asks what we mean - better
 held-out prediction, condition after condition - and needs at least 6 tests to reach
 0.05 / 3 (all 7 positive: p = 1/128)."""
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.special import logsumexp
 from scipy.stats import wilcoxon
@@ -138,6 +140,16 @@ def likelihood_words(dof):
     return f"multivariate t with dof = {dof:g}"
 
 
+@dataclass(frozen=True)
+class NoiseModel:
+    """The one noise model every model of a loop run is judged under."""
+    covs: dict               # {test: covariance} about a candidate's surrogate (residual_covariances)
+    plain_covs: dict         # {test: covariance} about the plain ensemble's mean
+    disc: object             # discrepancy.Discrepancy
+    dof: float               # the t's degrees of freedom (residual_dof)
+    scatter: float           # scatter_mse of the plain covariances and the discrepancy
+
+
 def independent_tests(point_test):
     """The likelihood before issue 75: every test its own source, no discrepancy term (each
     test's residual a t of its own)."""
@@ -146,14 +158,28 @@ def independent_tests(point_test):
                        tuple(map(str, tests)), ())
 
 
+@dataclass(frozen=True)
+class Sampled:
+    """A candidate's surrogate over the prior sample and its posterior from every test."""
+    samples: np.ndarray      # (M, d) the prior sample
+    mean: np.ndarray         # (M, P) the surrogate's mean there
+    sd: np.ndarray           # (M, P) its own sd
+    weights: np.ndarray      # (M,) the posterior's weights from every test
+
+    @property
+    def curve(self):
+        """(P,) the posterior mean of the candidate's ensemble-mean curve."""
+        return self.weights @ self.mean
+
+
 def _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof, disc):
-    """(prior samples (M, d), surrogate means (M, P), discrepancy.JointLoglik)."""
+    """(prior samples (M, d), surrogate means and sds (M, P), discrepancy.JointLoglik)."""
     lower, upper = _box(lower, upper)
     surrogate = Surrogate(lower, upper, seed).fit(thetas, [c.mean(axis=0) for c in curves_list],
                                                   groups=point_test)      # one GP per test
     samples = prior_samples(lower, upper, n_samples, seed)
     mean, sd = surrogate.predict(samples)
-    return samples, mean, joint_loglik(np.asarray(y, float)[None] - mean, sd, covs, point_test, disc, dof)
+    return samples, mean, sd, joint_loglik(np.asarray(y, float)[None] - mean, sd, covs, point_test, disc, dof)
 
 
 def held_out_joint(samples, mean, joint, point_test, disc):
@@ -176,13 +202,14 @@ def held_out_joint(samples, mean, joint, point_test, disc):
 
 def judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None,
                     disc=None):
-    """(held_out_candidate, fit_all) of a candidate from one surrogate fit; disc: the
-    discrepancy.Discrepancy (None: independent_tests)."""
+    """(held_out_candidate, fit_all, Sampled) of a candidate from one surrogate fit; disc:
+    the discrepancy.Discrepancy (None: independent_tests)."""
     y, point_test = np.asarray(y, float), np.asarray(point_test)
     disc = disc or independent_tests(point_test)
-    samples, mean, joint = _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof,
-                                    disc)
-    return held_out_joint(samples, mean, joint, point_test, disc), weighted_fit(samples, joint.full)[1:]
+    samples, mean, sd, joint = _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed,
+                                        dof, disc)
+    weights, *fit = weighted_fit(samples, joint.full)
+    return held_out_joint(samples, mean, joint, point_test, disc), tuple(fit), Sampled(samples, mean, sd, weights)
 
 
 def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None,
@@ -219,11 +246,12 @@ def scatter_mse(covs, point_test=None, disc=None):
     return float(held_out_variance(covs, point_test, disc).mean())
 
 
-def choose(pairs, y, scatter):
+def choose(pairs, y, scatter, tried=None):
     """(chosen name or None, {name: {gain, se, z, wins, tests, p, mse_cut, scatter_mse}}) by
     the rule in the module doc; pairs: {name: (the candidate's HeldOut, the plain model's)},
     all under one noise model (so the gains of different candidates are comparable); y the
-    measured points; scatter: scatter_mse of that noise model."""
+    measured points; scatter: scatter_mse of that noise model; tried: the candidates the
+    Bonferroni correction counts (default: those in pairs)."""
     y = np.asarray(y, float)
     evidence = {}
     for name, (held, plain) in pairs.items():
@@ -237,6 +265,6 @@ def choose(pairs, y, scatter):
                               wins=int(np.sum(diff >= GAIN_TIE)), tests=len(diff), p=p,
                               mse_cut=cut, scatter_mse=float(scatter))
     passing = {k: v for k, v in evidence.items()
-               if v["gain"] > 0 and v["p"] < ALPHA / len(pairs) and v["mse_cut"] > v["scatter_mse"]}
+               if v["gain"] > 0 and v["p"] < ALPHA / (tried or len(pairs)) and v["mse_cut"] > v["scatter_mse"]}
     chosen = max(passing, key=lambda k: passing[k]["gain"]) if passing else None
     return chosen, evidence

@@ -15,9 +15,11 @@ from ..inputs import open_netcdf
 from ..measured.importer import load_conditions
 from ..scenario.modifiers import MODIFIERS
 from .accumulation import fit_ensemble, predict
+from .discrepancy import source_name
 from .horizon import measured_curve
 from .residual import covariate_tests, residual, summary
 from .step import shared_runs, step_rows
+from .trust import detectable, discrepancy_rows, interval_notes, verdict
 
 COVARIATES = ("frequency_Hz", "confining_pressure_kPa", "deviator_max_kPa", "VCI")
 # the plain model's internal signals at its last simulated cycle (mean over the cases)
@@ -49,6 +51,9 @@ class LoopStatistics:
     plain_rmse: float          # the plain model over every point of the DEM horizon
     step: list                 # step.step_rows: the increment over the frequency step's window
     step_shared: list          # step.shared_runs of the plain model: tests whose runs are one
+    discrepancy: list = ()     # trust.discrepancy_rows: per source, beside each effect's size
+    detectable: dict = None    # trust.detectable: {effect: the smallest effect the rule would choose}
+    verdict: tuple = ("", "")  # trust.verdict: (class, sentence)
 
     @property
     def chosen_row(self):
@@ -68,6 +73,7 @@ def loop_statistics(run):
         row.update(signals)
     after = per_test_rows(run.targets, sel.after["curves"], lp["measurement_sd"]) if sel.after is not None else None
     beyond = [points_beyond(path, lp["quantity"], lp["cycles"]) for path in run.targets.measured]
+    detect = detectable(run) if run.noise is not None else {}
     return LoopStatistics(
         before=before, after=after,
         covariates=[r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)],
@@ -78,7 +84,9 @@ def loop_statistics(run):
         plain_rmse=rmse(run.targets.y, run.plain.prediction),
         step=step_rows(run.targets.names, [measured_curve(p, lp["quantity"]) for p in run.targets.measured],
                        step_models(run), lp["cycles"], lp["measurement_sd"]),
-        step_shared=shared_runs(run.plain.runs["cases"]))
+        step_shared=shared_runs(run.plain.runs["cases"]),
+        discrepancy=discrepancy_rows(run) if run.noise is not None else [], detectable=detect,
+        verdict=verdict(sel.chosen, detect, list(sel.candidates)))
 
 
 def step_models(run):
@@ -98,7 +106,7 @@ def step_models(run):
 def describe_test(name, conditions_path):
     """A test's name, source study and declared covariates (those it gives)."""
     c = load_conditions(conditions_path)
-    row = dict(test=name, source=c["source"].split(",")[0],
+    row = dict(test=name, source=source_name(c),
                **{k: float(c[k]) for k in COVARIATES[:3] if c.get(k) is not None})
     vci = (c.get("covariates") or {}).get("VCI")
     if vci:
@@ -157,6 +165,7 @@ def candidate_rows(selection, targets):
         mean, interval, ess = c.fit
         rows.append(dict(effect=name, parameters=[p.name for p in MODIFIERS[name].parameters],
                          mean=mean.tolist(), interval90=interval.tolist(), ess=ess,
+                         interval_notes=interval_notes(name, mean, interval),
                          held_out_rmse=c.held.rmse(targets.y, targets.point_test), chosen=name == selection.chosen,
                          **selection.evidence[name]))
     return rows

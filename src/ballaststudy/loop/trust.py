@@ -1,0 +1,109 @@
+"""What the data can tell (issue 75): the discrepancy's size per source beside each
+effect's, a fitted interval read against its design range, the smallest effect the rule
+would choose on this design, and the verdict's class.
+
+The smallest detectable effect is an argued approximation, not a power curve: each
+candidate's surrogate at a grid of its parameter stands in for the measured points (no
+noise, no chaos: the design's expected data), and the rule (select.choose, the Bonferroni
+correction over every candidate tried) is run on them against the plain model under the
+run's own noise model and discrepancy. An effect that passes on its expected data is chosen
+about half the time (its noise moves the evidence either way); the coverage check by
+simulation (bench/loop_coverage.py) measures it. Its size is the root mean square of the
+surrogate's curve minus the plain ensemble's mean over the measured points: one unit for
+every candidate, the one the discrepancy's size is given in."""
+import numpy as np
+
+from ..scenario.modifiers import MODIFIERS
+from .discrepancy import joint_loglik, source_beta
+from .select import choose, held_out_joint, held_out_plain
+
+GRID = 9            # parameter values per candidate the detectable size is read at
+EDGE_SHARE = 0.02   # an interval end this close to a bound (share of the range) is at the edge
+
+
+def _rms(v):
+    return float(np.sqrt(np.mean(np.square(v)))) if np.size(v) else float("nan")
+
+
+def discrepancy_rows(run):
+    """Per source: its terms, prior sd and the discrepancy under the plain model and under
+    each candidate at its posterior (mean, sd per term; size: its rms over the source's
+    points), beside the candidate's effect size (rms of its curve minus the plain mean)."""
+    noise, y, point_test = run.noise, run.targets.y, run.targets.point_test
+    disc = noise.disc
+    point_source = disc.test_source[point_test]
+    plain = source_beta(y - run.plain.prediction, noise.plain_covs, point_test, disc, noise.dof)
+    under = {name: source_beta(y - c.sampled.curve, noise.covs, point_test, disc, noise.dof)
+             for name, c in run.selection.candidates.items()}
+    rows = []
+    for s, source in enumerate(disc.sources):
+        sel = point_source == s
+
+        def entry(beta):
+            mean, sd = beta[s]
+            return dict(mean=mean.tolist(), sd=sd.tolist(), size=_rms(disc.basis[sel] @ mean))
+        rows.append(dict(source=source, terms=list(disc.terms), prior_sd=disc.prior_sd[s].tolist(),
+                         plain=entry(plain),
+                         candidates={name: entry(b) | dict(effect_size=_rms(
+                             run.selection.candidates[name].sampled.curve[sel] - run.plain.prediction[sel]))
+                             for name, b in under.items()}))
+    return rows
+
+
+def interval_notes(name, mean, interval):
+    """Per parameter of effect ``name``: {at_edge: 'low' / 'high' / '', width_share: the
+    interval's width over the prior's 90 % width}."""
+    notes = []
+    for p, (lo, hi) in zip(MODIFIERS[name].parameters, interval):
+        span = p.high - p.low
+        edge = "low" if lo - p.low < EDGE_SHARE * span else "high" if p.high - hi < EDGE_SHARE * span else ""
+        notes.append(dict(parameter=p.name, at_edge=edge, width_share=float((hi - lo) / (0.9 * span))))
+    return notes
+
+
+def detectable(run):
+    """{effect: {sizes, values, passes per grid value; smallest: the smallest passing size
+    (NaN: none in the range)}} of every one-parameter candidate (module doc)."""
+    noise, point_test = run.noise, run.targets.point_test
+    plain_mean = run.plain.prediction
+    tried = len(run.selection.candidates)
+    out = {}
+    for name, c in run.selection.candidates.items():
+        if c.sampled.samples.shape[1] != 1:
+            continue
+        s = c.sampled
+        p = MODIFIERS[name].parameters[0]
+        values = np.linspace(p.low, p.high, GRID)
+        rows = []
+        for v in values:
+            at = int(np.argmin(np.abs(s.samples[:, 0] - v)))
+            expected = s.mean[at]
+            joint = joint_loglik(expected[None] - s.mean, s.sd, noise.covs, point_test, noise.disc, noise.dof)
+            held = held_out_joint(s.samples, s.mean, joint, point_test, noise.disc)
+            plain = held_out_plain(plain_mean[None], expected, point_test, noise.plain_covs, noise.dof, noise.disc)
+            chosen, _ = choose({name: (held, plain)}, expected, noise.scatter, tried)
+            rows.append((float(s.samples[at, 0]), _rms(expected - plain_mean), chosen == name))
+        passing = [size for _, size, ok in rows if ok]
+        out[name] = dict(values=[r[0] for r in rows], sizes=[r[1] for r in rows], passes=[r[2] for r in rows],
+                         smallest=min(passing) if passing else float("nan"))
+    return out
+
+
+def verdict(chosen, detect, candidates):
+    """(class, sentence): 'chosen', 'no effect needed', 'cannot tell', or 'no effect needed
+    among some, cannot tell for the others' ({effect: detectable row}; candidates: the
+    names tried)."""
+    if chosen:
+        return "chosen", f"Effect chosen: {chosen}."
+    seen = [n for n in candidates if n in detect and np.isfinite(detect[n]["smallest"])]
+    blind = [n for n in candidates if n not in seen]
+    if not candidates:
+        return "no candidates", "No candidate effect was run: the plain model alone is compared."
+    if not seen:
+        return "cannot tell", ("These data cannot tell: no candidate, anywhere in its range, would pass the rule on "
+                               "this design's expected data; 'none chosen' says nothing about the effects.")
+    words = "; ".join(f"{n} from an rms effect of {detect[n]['smallest']:.3g}" for n in seen)
+    if not blind:
+        return "no effect needed", f"No effect needed: the rule would have chosen {words}; none passed."
+    return "partly", (f"No effect needed among {', '.join(seen)} (the rule would have chosen {words}); the data cannot "
+                      f"tell for {', '.join(blind)} (no value in its range would pass on this design).")
