@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ballaststudy.loop.discrepancy import (beta_posterior, held_out_variance, joint_loglik, make_discrepancy,
+from ballaststudy.loop.discrepancy import (beta_posterior, held_out_variance, joint_loglik, loglik, make_discrepancy,
                                            source_beta, per_test_stats)
 
 
@@ -88,6 +88,7 @@ def test_the_joint_density_is_the_integral_over_the_discrepancy(dof):
     mean = rng.normal(0.01, 1e-3, (2, len(y)))
     joint = joint_loglik(y[None] - mean, np.zeros_like(mean), covs, point_test, disc, dof)
     tol = 1e-7 if dof is None else 1e-3
+    assert np.allclose(loglik(y[None] - mean, np.zeros_like(mean), covs, point_test, disc, dof), joint.full)
     for i, m in enumerate(mean):
         assert joint.full[i] == pytest.approx(_dense_source(disc, covs, point_test, y, m, range(5), dof), abs=tol)
         for j in (0, 2):

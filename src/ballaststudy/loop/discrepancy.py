@@ -210,6 +210,13 @@ class JointLoglik:
         return self.full[:, None] - self.without
 
 
+def loglik(resid, sd, covs, point_test, disc, dof):
+    """(M,) log p(y | theta) of residuals resid (M, P) alone (joint_loglik's ``full``)."""
+    stats = per_test_stats(resid, sd, covs, point_test, disc.basis)
+    return sum(source_logpdf([stats[j] for j in range(len(stats)) if disc.test_source[j] == s], disc.prior_sd[s],
+                             dof)[0] for s in range(len(disc.sources)))
+
+
 def joint_loglik(resid, sd, covs, point_test, disc, dof):
     """JointLoglik of residuals resid (M, P) (sd (M, P) the surrogate's) under the test
     covariances {test: (P_t, P_t)} in test order and the Discrepancy disc."""
