@@ -1,0 +1,64 @@
+"""What the data can tell (loop/trust.py) where the answer is known: an effect that varies
+from test to test is detectable from a size of the order of the scatter, one of the
+discrepancy's own shape (the same offset in every test) never is; the verdict's classes; an
+interval at the edge of its range said so."""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from ballaststudy.loop.discrepancy import make_discrepancy
+from ballaststudy.loop.select import NoiseModel, Sampled, residual_dof, scatter_mse
+from ballaststudy.loop.trust import detectable, interval_notes, verdict
+
+TESTS, SD = 7, 3e-4
+FREQ = np.array([5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0])
+
+
+def _run(pattern):
+    """A run of 7 tests, 12 points each, noise sd SD, a 'fouling' candidate whose curve moves
+    by friction_loss / 0.9 x pattern(test, N) (exact surrogate) from the plain mean."""
+    n = np.tile(np.geomspace(1, 200, 12), TESTS)
+    point_test = np.repeat(np.arange(TESTS), 12)
+    plain = 0.01 + 0.003 * np.log(n)
+    samples = np.linspace(0.0, 0.9, 257)[:, None]
+    mean = plain + samples / 0.9 * pattern(point_test, n)
+    covs = {t: SD ** 2 * np.eye(12) for t in range(TESTS)}
+    disc = make_discrepancy(plain, n, point_test, ["lab"] * TESTS)
+    noise = NoiseModel(covs, covs, disc, residual_dof(3), scatter_mse(covs, point_test, disc))
+    sampled = Sampled(samples, mean, np.zeros_like(mean), np.full(len(samples), 1 / len(samples)))
+    return SimpleNamespace(noise=noise, targets=SimpleNamespace(point_test=point_test),
+                           plain=SimpleNamespace(prediction=plain),
+                           selection=SimpleNamespace(candidates={"fouling": SimpleNamespace(sampled=sampled)}))
+
+
+def test_an_effect_that_varies_from_test_to_test_is_detectable_from_about_the_scatter():
+    """rate-like: 0.004 x f / 60 x ln N / ln 200 at the top of the range. The rule needs a
+    held-out cut beyond the scatter (rms > SD) and every test better by half a nat."""
+    d = detectable(_run(lambda t, n: 0.004 * FREQ[t] / 60 * np.log(n) / np.log(200)))["fouling"]
+    assert np.isfinite(d["smallest"]) and SD < d["smallest"] < 10 * SD, d
+    assert d["passes"][-1] and not d["passes"][0]        # the largest effect passes, none at 0
+
+
+def test_an_effect_of_the_discrepancys_shape_is_never_detectable():
+    """The same offset in every test: the discrepancy absorbs it at any size."""
+    d = detectable(_run(lambda t, n: 0.004 * np.ones_like(n)))["fouling"]
+    assert np.isnan(d["smallest"]) and not any(d["passes"]), d
+
+
+def test_the_verdicts_classes():
+    seen, blind = dict(smallest=1e-3), dict(smallest=np.nan)
+    assert verdict("rate", {}, ["rate"])[0] == "chosen"
+    assert verdict(None, {"a": seen, "b": seen}, ["a", "b"])[0] == "no effect needed"
+    assert verdict(None, {"a": blind}, ["a", "b"])[0] == "cannot tell"
+    kind, words = verdict(None, {"a": seen, "b": blind}, ["a", "b"])
+    assert kind == "partly" and "cannot tell for b" in words
+    assert verdict(None, {}, [])[0] == "no candidates"
+
+
+@pytest.mark.parametrize("interval, edge", [([0.195, 0.1999], "high"), ([0.0, 0.03], "low"), ([0.05, 0.1], "")])
+def test_an_interval_at_the_edge_of_its_range_is_marked(interval, edge):
+    """abrasion's wear_per_cycle is designed over [0, 0.2] (issue 75: 0.198 [0.195, 0.1999])."""
+    (note,) = interval_notes("abrasion", [np.mean(interval)], [interval])
+    assert note["at_edge"] == edge
+    assert note["width_share"] == pytest.approx((interval[1] - interval[0]) / 0.18)
