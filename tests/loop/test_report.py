@@ -145,7 +145,7 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert "Stress mapping: **none**" in text
     assert "likelihood: multivariate t with dof = 1 (K - 1:" in text
     assert "16 DEM cases, 14 runs from 10 first loadings (" in text and "; 0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
-    assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] (0.19) |" in text
+    assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] (0.19), excludes the no-effect 0.7 |" in text
     assert "| 0.01 | 2 | - | chosen |" in text     # held-out RMSE, cut / scatter sqrt(4), detectable (2 tests: never), verdict
     assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text
     assert "No accumulation law given" in text and ds.attrs["long_term_law"] == "none"

@@ -62,3 +62,12 @@ def test_an_interval_at_the_edge_of_its_range_is_marked(interval, edge):
     (note,) = interval_notes("abrasion", [np.mean(interval)], [interval])
     assert note["at_edge"] == edge
     assert note["width_share"] == pytest.approx((interval[1] - interval[0]) / 0.18)
+
+
+def test_the_no_effect_value_is_the_plain_models():
+    """end restraint is off at the stones' own friction (Table 4.2's 0.7, or the calibrated
+    mu); abrasion at no wear; rate has no such value (its real-time mode is a change)."""
+    assert interval_notes("end_restraint", [0.58], [[0.56, 0.60]])[0]["holds_no_effect"] is False
+    assert interval_notes("end_restraint", [0.58], [[0.56, 0.60]], {"mu": 0.59})[0]["holds_no_effect"] is True
+    assert interval_notes("abrasion", [0.01], [[0.0, 0.02]])[0]["no_effect"] == 0.0
+    assert interval_notes("rate", [0.45], [[0.44, 0.46]])[0]["holds_no_effect"] is None

@@ -77,7 +77,7 @@ def loop_statistics(run):
     return LoopStatistics(
         before=before, after=after,
         covariates=[r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)],
-        candidates=candidate_rows(sel, run.targets),
+        candidates=candidate_rows(sel, run.targets, run.base),
         long_term=long_term(beyond, run.cycles, plain_curves, run.long_term_law),
         long_term_after=(long_term(beyond, run.cycles, sel.after["curves"], run.long_term_law)
                          if sel.after is not None else None),
@@ -157,7 +157,7 @@ def long_term(beyond, cycles, curves, law):
     return out
 
 
-def candidate_rows(selection, targets):
+def candidate_rows(selection, targets, material=None):
     """Per candidate effect: its parameters, fitted mean and 90 % interval, held-out RMSE,
     the rule's evidence and whether it was chosen (loop.nc's candidates_json)."""
     rows = []
@@ -165,7 +165,7 @@ def candidate_rows(selection, targets):
         mean, interval, ess = c.fit
         rows.append(dict(effect=name, parameters=[p.name for p in MODIFIERS[name].parameters],
                          mean=mean.tolist(), interval90=interval.tolist(), ess=ess,
-                         interval_notes=interval_notes(name, mean, interval),
+                         interval_notes=interval_notes(name, mean, interval, material),
                          held_out_rmse=c.held.rmse(targets.y, targets.point_test), chosen=name == selection.chosen,
                          **selection.evidence[name]))
     return rows

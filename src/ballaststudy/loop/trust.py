@@ -50,14 +50,20 @@ def discrepancy_rows(run):
     return rows
 
 
-def interval_notes(name, mean, interval):
+def interval_notes(name, mean, interval, material=None):
     """Per parameter of effect ``name``: {at_edge: 'low' / 'high' / '', width_share: the
-    interval's width over the prior's 90 % width}."""
+    interval's width over the prior's 90 % width, no_effect: the value at which the effect
+    is off under the plain model's ``material`` values (None: no such value), holds_no_effect:
+    whether the interval holds it (None: no such value)}."""
+    eff = MODIFIERS[name]
+    off = eff.off(material or {}) if eff.off else {}
     notes = []
-    for p, (lo, hi) in zip(MODIFIERS[name].parameters, interval):
+    for p, (lo, hi) in zip(eff.parameters, interval):
         span = p.high - p.low
         edge = "low" if lo - p.low < EDGE_SHARE * span else "high" if p.high - hi < EDGE_SHARE * span else ""
-        notes.append(dict(parameter=p.name, at_edge=edge, width_share=float((hi - lo) / (0.9 * span))))
+        value = off.get(p.name)
+        notes.append(dict(parameter=p.name, at_edge=edge, width_share=float((hi - lo) / (0.9 * span)),
+                          no_effect=value, holds_no_effect=None if value is None else bool(lo <= value <= hi)))
     return notes
 
 

@@ -43,4 +43,4 @@ MODIFIER = Modifier(
     "abrasion", "flat joints of stone balls in the strong force network lose a share of their "
     "strength every cycle",
     (ModifierParameter("wear_per_cycle", "share of a loaded joint's strength lost per cycle", "1", 0.0, 0.2),),
-    hook=hook, needs_flat_joints=True)
+    hook=hook, needs_flat_joints=True, off=lambda material: {"wear_per_cycle": 0.0})

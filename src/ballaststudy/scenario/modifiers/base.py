@@ -50,6 +50,9 @@ class Modifier:
                                         # without them (rigid) cannot take it
     needs_splitting: bool = False       # acts on the strengths of stones that split: rigid
                                         # stones with splitting on
+    off: Callable = None                # (material values {name: value}) -> {parameter: the value at
+                                        # which the effect is off, the plain model}; None: no value
+                                        # is (rate: its real-time mode is itself a change)
 
     @property
     def hook_only(self):

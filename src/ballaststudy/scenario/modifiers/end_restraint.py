@@ -3,7 +3,7 @@ triaxial specimen's ends sit on the platens through an imperfect bedding; rough 
 restrain the lateral spreading of the end zones, lubricated or poorly bedded ones let the
 stones slide out (a classic source of differences between triaxial tests). The parameter is
 the stone-platen friction coefficient (the plain model: Table 4.2's stone friction)."""
-from ...dem.materials import STONE_MATERIALS
+from ...dem.materials import STONE_MATERIALS, ContactMaterial
 from ...rig.biaxial import PLATEN
 from .base import Modifier, ModifierParameter
 
@@ -17,4 +17,4 @@ def configure(rig, values, covariates):
 MODIFIER = Modifier(
     "end_restraint", "stone-platen friction (rough, lubricated or poorly bedded specimen ends)",
     (ModifierParameter("platen_friction", "friction coefficient between stones and platens", "1", 0.0, 1.2),),
-    configure)
+    configure, off=lambda material: {"platen_friction": material.get("mu", ContactMaterial().mu)})

@@ -24,4 +24,4 @@ MODIFIER = Modifier(
     "fouling", "stone-stone friction reduced in proportion to the void contamination index VCI",
     (ModifierParameter("friction_loss", "share of the stone-stone friction lost at VCI = 100 %",
                      "1", 0.0, 0.9),),
-    configure, covariate="VCI")
+    configure, covariate="VCI", off=lambda material: {"friction_loss": 0.0})
