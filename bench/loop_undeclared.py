@@ -47,6 +47,17 @@ def per_test_rmse(loop_nc, effect):
     return np.array([[rmse(y[test == t], m[test == t]) for m in (plain, held)] for t in np.unique(test)])
 
 
+def verdict_of(loop_nc):
+    """The verdict and the discrepancy per source (plain model) a loop.nc reports."""
+    import json
+    import xarray as xr
+    with xr.open_dataset(loop_nc) as ds:
+        disc = json.loads(ds.attrs["discrepancy_json"])
+        return ds.attrs["verdict"] + " | discrepancy (plain): " + "; ".join(
+            f"{d['source'][:20]} {dict(zip(d['terms'], (round(m, 7) for m in d['plain']['mean'])))} "
+            f"size {d['plain']['size']:.2e}" for d in disc)
+
+
 def attainable(out, name, specimens, cycles, plain_per_test, plain, probes):
     """Print the planted scenario's irreducible RMSE (synthetic.irreducible_rmse: the truth
     run again from ``probes`` perturbations, K more cases each) against its plain model's:
@@ -80,6 +91,8 @@ def parse():
     ap.add_argument("--fresh", action="store_true")
     ap.add_argument("--fresh-per-test", action="store_true")
     ap.add_argument("--probes", type=int, default=3, help="chaos probes of each truth (irreducible RMSE)")
+    ap.add_argument("--value", type=float, default=None,
+                    help="the planted effects' parameter value instead of PLANTED's (one-parameter effects)")
     return ap.parse_args()
 
 
@@ -101,18 +114,24 @@ if __name__ == "__main__":
             fresh = [fresh[j * args.cases:(j + 1) * args.cases] for j in range(sets)]
     for name in args.scenarios:
         t0 = time.time()
-        chosen, candidates, plain = run_scenario(args.out, name, specimens, args.cycles, fresh)
-        print(f"planted {name} {PLANTED.get(name, OUT_OF_LIBRARY.get(name))} -> chosen {chosen} | plain RMSE {plain:.2e} | "
+        values = ({k: args.value for k in PLANTED[name]} if args.value is not None and PLANTED.get(name) else None)
+        chosen, candidates, plain = run_scenario(args.out, name, specimens, args.cycles, fresh, values=values)
+        print(f"planted {name} {values or PLANTED.get(name, OUT_OF_LIBRARY.get(name))} -> chosen {chosen} | "
+              f"plain RMSE {plain:.2e} | "
               f"{(time.time() - t0) / 60:.1f} min", flush=True)
         for c in candidates:
             print(f"    {c['effect']:13s} gain {c['gain']:9.3g}  {c['wins']}/{c['tests']} better  p {c['p']:.2g}  "
                   f"cut/scatter {c['mse_cut'] / c['scatter_mse']:+.2f}  "
+                  f"width/prior {c['interval_notes'][0]['width_share']:.2f}{' at ' + c['interval_notes'][0]['at_edge'] + ' edge' if c['interval_notes'][0]['at_edge'] else ''}  "
+                  f"holds no-effect {c['interval_notes'][0]['holds_no_effect']}  "
                   f"held-out RMSE {c['held_out_rmse']:.2e}  fitted {np.round(c['mean'], 3).tolist()} "
                   f"(90 % {np.round(c['interval90'], 3).tolist()})", flush=True)
+        folder = args.out / (name + ("_" + "_".join(f"{v:g}" for v in values.values()) if values else ""))
+        print(f"    verdict: {verdict_of(folder / 'loop' / 'loop.nc')}", flush=True)
         if name in PLANTED and name != "none":
-            r = per_test_rmse(args.out / name / "loop" / "loop.nc", name)
+            r = per_test_rmse(folder / "loop" / "loop.nc", name)
             print(f"    per test, {name}'s held-out RMSE / the plain model's: "
                   + " ".join(f"{b / a:.2f}" for a, b in r) + "; plain RMSE " + " ".join(f"{a:.1e}" for a, _ in r),
                   flush=True)
-            if not args.fresh:      # fresh truths carry their specimens' offsets as well
+            if not args.fresh and not values:      # fresh truths carry their specimens' offsets as well
                 attainable(args.out, name, specimens, args.cycles, r[:, 0], plain, args.probes)

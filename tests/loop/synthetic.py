@@ -150,7 +150,9 @@ PLANTED = {"none": {}, "rate": {"contact_damping_ratio": 0.3}, "abrasion": {"wea
            "fouling": {"friction_loss": 0.6}, "end_restraint": {"platen_friction": 0.2}}
 # A change no candidate makes (issue 34's out-of-library control): the stones' contact twice
 # as stiff as Table 4.2's, planted as a material parameter the loop's plain model keeps.
-OUT_OF_LIBRARY = {"stiffer_contact": {"E_star": 2 * ContactMaterial().E}}
+OUT_OF_LIBRARY = {"stiffer_contact": {"E_star": 2 * ContactMaterial().E},
+                  # issue 75's: the contact's normal-to-shear stiffness ratio 2.5 -> 6
+                  "stiffness_ratio": {"kappa_star": 6.0}}
 
 
 SCENARIO_LIBRARY = dict(n_stones=24, size=(0.035, 0.065), r0=0.008, seed=3, database="tiny")
@@ -190,18 +192,21 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
     return specimens, folder / "config.yaml", folder / "base.yaml"
 
 
-def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, seed=0):
-    """Plant SCENARIO_TESTS with effect ``name`` (PLANTED; "none": the plain model) or a
-    material change (OUT_OF_LIBRARY) and run the loop on them, its cases cached in
-    ``folder``/cases (shared by the scenarios). Returns (chosen effect or None, the
-    candidates' evidence, the plain model's RMSE)."""
+def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, seed=0, values=None):
+    """Plant SCENARIO_TESTS with effect ``name`` (PLANTED, or at ``values``; "none": the
+    plain model) or a material change (OUT_OF_LIBRARY) and run the loop on them, its cases
+    cached in ``folder``/cases (shared by the scenarios), in ``folder``/<name> (or
+    <name>_<value> with ``values``). Returns (chosen effect or None, the candidates'
+    evidence, the plain model's RMSE)."""
     folder = Path(folder)
     if name in OUT_OF_LIBRARY:
-        effect, values, base = None, {}, {**SCENARIO_BASE, **OUT_OF_LIBRARY[name]}
+        effect, planted, base = None, {}, {**SCENARIO_BASE, **OUT_OF_LIBRARY[name]}
     else:
-        effect, values, base = None if name == "none" else name, PLANTED[name], SCENARIO_BASE
+        effect, planted, base = None if name == "none" else name, values or PLANTED[name], SCENARIO_BASE
+    if values:
+        name = name + "_" + "_".join(f"{v:g}" for v in values.values())
     measured, conditions = plant(folder / name / "tests", SCENARIO_TESTS, truth_specimens or specimens,
-                                 folder / "config.yaml", cycles, effect, values, base, seed=seed, cache=folder,
+                                 folder / "config.yaml", cycles, effect, planted, base, seed=seed, cache=folder,
                                  jobs=jobs)
     out = folder / name / "loop"
     out.mkdir(parents=True, exist_ok=True)

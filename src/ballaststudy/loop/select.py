@@ -47,6 +47,16 @@ positive definite with few cases.
       The case-to-case covariance would be far too wide here (on 24-stone specimens a
       specimen's offset is as large as the mean strain; the chaos a fraction of it).
 
+What the tests of one source share (the lab's ballast, rig and habits: never the model's)
+is not in the per-test covariances, so T tests would count one shared offset T times and
+any effect bending every curve that way would gain on every test (issue 75: every
+candidate's interval a few per cent wide, excluding its no-effect value). A discrepancy per
+source (discrepancy.py: an offset and a slope in ln N, with a stated prior) is estimated
+jointly with the candidate's parameters and integrated out; a held-out test is predicted
+with what the other tests of its source say of it, and the scatter of the rule's second
+condition includes what they leave of it. ``disc`` None: independent_tests, the likelihood
+before.
+
 Leave one condition out: for each test t, the posterior of theta from the other tests
 (uniform prior, importance weights on a scrambled Sobol sample), the held-out log
 predictive density lpd_t = log sum_s w_s p(y_t | theta_s), and the held-out prediction
