@@ -33,13 +33,12 @@ import xarray as xr
 import yaml
 from scipy.stats import binomtest
 
-from ballaststudy.cli import main
 from ballaststudy.loop.select import ALPHA
 from ballaststudy.scenario.modifiers import EFFECTS, MODIFIERS
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))        # the planted scenarios are a test helper (bench/loop_undeclared.py)
-from tests.loop.synthetic import SCENARIO_BASE, SCENARIO_TESTS, plant, scenario_setup  # noqa: E402
+from tests.loop.synthetic import SCENARIO_BASE, SCENARIO_TESTS, plant, run_loop, scenario_setup  # noqa: E402
 
 LEVEL = 0.9
 
@@ -78,13 +77,7 @@ def run_truth(out, t, specimens, fresh, cycles, jobs):
     values = {MODIFIERS[effect].parameters[0].name: t["value"]} if effect else {}
     measured, conditions = plant(folder / "tests", SCENARIO_TESTS, truth_specimens, out / "config.yaml", cycles,
                                  effect, values, SCENARIO_BASE, seed=t["truth"], cache=out, jobs=jobs)
-    loop_dir.mkdir(parents=True, exist_ok=True)
-    if not (loop_dir / "cases").exists():
-        (loop_dir / "cases").symlink_to((out / "cases").resolve())
-    main(["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens", *map(str, specimens),
-          "--parameters", str(out / "base.yaml"), "--out-dir", str(loop_dir), "--jobs", str(jobs), "--config",
-          str(out / "config.yaml"), "--quiet"])
-    return loop_dir / "loop.nc"
+    return run_loop(out, loop_dir, measured, conditions, specimens, jobs) / "loop.nc"
 
 
 def truth_rows(t, loop_nc):

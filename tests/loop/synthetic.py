@@ -192,6 +192,18 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
     return specimens, folder / "config.yaml", folder / "base.yaml"
 
 
+def run_loop(folder, out, measured, conditions, specimens, jobs=2):
+    """`ballaststudy loop` on planted tests, in ``out``, with the scenario folder's config,
+    base parameters and case cache (shared by every loop run there); returns ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    if not (out / "cases").exists():
+        (out / "cases").symlink_to((folder / "cases").resolve())
+    main(["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens", *map(str, specimens),
+          "--parameters", str(folder / "base.yaml"), "--out-dir", str(out), "--jobs", str(jobs), "--config",
+          str(folder / "config.yaml"), "--quiet"])
+    return out
+
+
 def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, seed=0, values=None):
     """Plant SCENARIO_TESTS with effect ``name`` (PLANTED, or at ``values``; "none": the
     plain model) or a material change (OUT_OF_LIBRARY) and run the loop on them, its cases
@@ -208,13 +220,7 @@ def run_scenario(folder, name, specimens, cycles, truth_specimens=None, jobs=2, 
     measured, conditions = plant(folder / name / "tests", SCENARIO_TESTS, truth_specimens or specimens,
                                  folder / "config.yaml", cycles, effect, planted, base, seed=seed, cache=folder,
                                  jobs=jobs)
-    out = folder / name / "loop"
-    out.mkdir(parents=True, exist_ok=True)
-    if not (out / "cases").exists():
-        (out / "cases").symlink_to((folder / "cases").resolve())
-    main(["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens", *map(str, specimens),
-          "--parameters", str(folder / "base.yaml"), "--out-dir", str(out), "--jobs", str(jobs), "--config",
-          str(folder / "config.yaml"), "--quiet"])
+    out = run_loop(folder, folder / name / "loop", measured, conditions, specimens, jobs)
     chosen = yaml.safe_load((out / "chosen.yaml").read_text())["effect"]
     with xr.open_dataset(out / "loop.nc") as ds:
         candidates = json.loads(ds.attrs["candidates_json"])
