@@ -56,12 +56,15 @@ def test_the_verdicts_classes():
     assert verdict(None, {}, [])[0] == "no candidates"
 
 
-@pytest.mark.parametrize("interval, edge", [([0.195, 0.1999], "high"), ([0.0, 0.03], "low"), ([0.05, 0.1], "")])
+@pytest.mark.parametrize("interval, edge", [([0.195, 0.1999], "high"), ([0.0, 0.03], ""), ([0.05, 0.1], "")])
 def test_an_interval_at_the_edge_of_its_range_is_marked(interval, edge):
-    """abrasion's wear_per_cycle is designed over [0, 0.2] (issue 75: 0.198 [0.195, 0.1999])."""
+    """abrasion's wear_per_cycle is designed over [0, 0.2] (issue 75: 0.198 [0.195, 0.1999]);
+    its low bound is no wear, an answer inside the range, not an edge; end restraint's low
+    bound (frictionless platens) is an edge."""
     (note,) = interval_notes("abrasion", [np.mean(interval)], [interval])
     assert note["at_edge"] == edge
     assert note["width_share"] == pytest.approx((interval[1] - interval[0]) / 0.18)
+    assert interval_notes("end_restraint", [0.01], [[0.0, 0.02]])[0]["at_edge"] == "low"
 
 
 def test_the_no_effect_value_is_the_plain_models():

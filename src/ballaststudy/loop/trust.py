@@ -51,7 +51,9 @@ def discrepancy_rows(run):
 
 
 def interval_notes(name, mean, interval, material=None):
-    """Per parameter of effect ``name``: {at_edge: 'low' / 'high' / '', width_share: the
+    """Per parameter of effect ``name``: {at_edge: 'low' / 'high' / '' (an end within
+    EDGE_SHARE of a bound other than the no-effect value: the data ask for more than the range
+    allows), width_share: the
     interval's width over the prior's 90 % width, no_effect: the value at which the effect
     is off under the plain model's ``material`` values (None: no such value), holds_no_effect:
     whether the interval holds it (None: no such value)}."""
@@ -60,8 +62,10 @@ def interval_notes(name, mean, interval, material=None):
     notes = []
     for p, (lo, hi) in zip(eff.parameters, interval):
         span = p.high - p.low
-        edge = "low" if lo - p.low < EDGE_SHARE * span else "high" if p.high - hi < EDGE_SHARE * span else ""
         value = off.get(p.name)
+        edge = "low" if lo - p.low < EDGE_SHARE * span else "high" if p.high - hi < EDGE_SHARE * span else ""
+        if edge and value == (p.low if edge == "low" else p.high):
+            edge = ""        # the bound is where the effect is off: no effect is an answer inside the range
         notes.append(dict(parameter=p.name, at_edge=edge, width_share=float((hi - lo) / (0.9 * span)),
                           no_effect=value, holds_no_effect=None if value is None else bool(lo <= value <= hi)))
     return notes
