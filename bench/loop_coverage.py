@@ -13,7 +13,8 @@ by every truth (common random numbers); only the truths are new runs. Truths are
 order and each is written as it ends, so an interrupted run resumes where it stopped.
 
 Writes OUT/truths.csv (per truth and candidate: the interval, whether it holds the planted
-value or, for a candidate not planted, its no-effect value, the choice, the verdict, the
+value or, for a candidate not planted, does not exclude its no-effect value (an interval
+half the prior's width or wider excludes nothing: loop/trust.py), the choice, the verdict, the
 smallest detectable effect) and OUT/coverage.csv (per planted effect and in all: truths,
 `coverage` of the 90 % intervals with its Clopper-Pearson 90 % interval, `false_choices`,
 the planted effect chosen, the intervals' width over the prior's), and prints the table.
@@ -95,7 +96,8 @@ def truth_rows(t, loop_nc):
                          candidate=c["effect"], mean=c["mean"][0], lo=lo, hi=hi,
                          width_share=note["width_share"], at_edge=note["at_edge"],
                          against="planted" if planted else ("no_effect" if target is not None else ""),
-                         holds="" if target is None else int(lo <= target <= hi),
+                         holds="" if target is None else int(lo <= target <= hi if planted
+                                                             else not note["excludes_no_effect"]),
                          chosen=chosen, verdict=kind,
                          detectable=detect.get(c["effect"], {}).get("smallest", float("nan"))))
     return rows

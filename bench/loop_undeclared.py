@@ -123,7 +123,7 @@ if __name__ == "__main__":
             print(f"    {c['effect']:13s} gain {c['gain']:9.3g}  {c['wins']}/{c['tests']} better  p {c['p']:.2g}  "
                   f"cut/scatter {c['mse_cut'] / c['scatter_mse']:+.2f}  "
                   f"width/prior {c['interval_notes'][0]['width_share']:.2f}{' at ' + c['interval_notes'][0]['at_edge'] + ' edge' if c['interval_notes'][0]['at_edge'] else ''}  "
-                  f"holds no-effect {c['interval_notes'][0]['holds_no_effect']}  "
+                  f"excludes no-effect {c['interval_notes'][0]['excludes_no_effect']}  "
                   f"held-out RMSE {c['held_out_rmse']:.2e}  fitted {np.round(c['mean'], 3).tolist()} "
                   f"(90 % {np.round(c['interval90'], 3).tolist()})", flush=True)
         folder = args.out / (name + ("_" + "_".join(f"{v:g}" for v in values.values()) if values else ""))

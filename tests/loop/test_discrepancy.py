@@ -132,3 +132,11 @@ def test_a_slope_needs_points_at_three_cycles():
     y = np.array([1.0, 2.0, 1.5, 2.5])
     disc = make_discrepancy(y, [1, 10, 1, 10], [0, 0, 1, 1], ["a", "a"])
     assert disc.terms == ("offset",) and disc.basis.shape == (4, 1)
+
+
+def test_the_prior_scale_is_the_larger_of_the_measured_and_the_models_quantity():
+    """A model straining 7 times what the lab measured: the discrepancy's prior lets it be
+    that large (prior sd from the model's rms), not the measured rms."""
+    y, n, pt = np.full(6, 0.01), np.tile([1.0, 5.0, 10.0], 2), np.repeat([0, 1], 3)
+    assert make_discrepancy(y, n, pt, ["a", "a"]).prior_sd[0, 0] == pytest.approx(0.01)
+    assert make_discrepancy(y, n, pt, ["a", "a"], model=np.full(6, 0.07)).prior_sd[0, 0] == pytest.approx(0.07)

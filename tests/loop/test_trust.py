@@ -70,7 +70,15 @@ def test_an_interval_at_the_edge_of_its_range_is_marked(interval, edge):
 def test_the_no_effect_value_is_the_plain_models():
     """end restraint is off at the stones' own friction (Table 4.2's 0.7, or the calibrated
     mu); abrasion at no wear; rate has no such value (its real-time mode is a change)."""
-    assert interval_notes("end_restraint", [0.58], [[0.56, 0.60]])[0]["holds_no_effect"] is False
-    assert interval_notes("end_restraint", [0.58], [[0.56, 0.60]], {"mu": 0.59})[0]["holds_no_effect"] is True
+    assert interval_notes("end_restraint", [0.58], [[0.56, 0.60]])[0]["excludes_no_effect"] is True
+    assert interval_notes("end_restraint", [0.58], [[0.56, 0.60]], {"mu": 0.59})[0]["excludes_no_effect"] is False
     assert interval_notes("abrasion", [0.01], [[0.0, 0.02]])[0]["no_effect"] == 0.0
-    assert interval_notes("rate", [0.45], [[0.44, 0.46]])[0]["holds_no_effect"] is None
+    assert interval_notes("rate", [0.45], [[0.44, 0.46]])[0]["excludes_no_effect"] is None
+
+
+def test_a_wide_interval_excludes_nothing_and_presses_on_no_edge():
+    """The prior's own 90 % interval of abrasion, [0.01, 0.19], never holds 0 (no wear) and
+    ends near 0.2 by construction: it says nothing, and is read so."""
+    (note,) = interval_notes("abrasion", [0.1], [[0.01, 0.19]])
+    assert note["excludes_no_effect"] is False and note["at_edge"] == "" and note["width_share"] == pytest.approx(1.0)
+    assert interval_notes("rate", [0.63], [[0.27, 0.699]])[0]["at_edge"] == ""

@@ -221,7 +221,7 @@ def _loop(args):
         runs = _run_candidates(make, [e for e in lp["effects"] if e not in untestable], lp, cfg["seed"])
         dof = residual_dof(len(plain_at), lp["specimen_share"])      # the loop runs one chaos probe
         disc = make_discrepancy(y, targets.point_cycle, point_test, [source_name(c) for c in conditions],
-                                lp["discrepancy_terms"], lp["discrepancy_prior_sd_share"])
+                                lp["discrepancy_terms"], lp["discrepancy_prior_sd_share"], plain_at.mean(axis=0))
         candidates, plain, noise = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"], dof, disc)
         chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, noise.scatter)
         after = None

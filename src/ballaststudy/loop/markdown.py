@@ -123,7 +123,8 @@ def _candidates(run, stats, scale, unit):
              "is chosen.", "",
              "Interval: the 90 % posterior interval, its width over the prior's 90 % (1: the data said "
              "nothing), marked where it runs into an edge of the design range (the data ask for more than the "
-             "range allows: no estimate) and where it excludes the effect's no-effect value (the plain model's). Detectable: the smallest rms effect the rule chooses on this design's "
+             "range allows: no estimate) and where it excludes the effect's no-effect value (the plain model's); an "
+             "interval half the prior's width or wider is read as neither. Detectable: the smallest rms effect the rule chooses on this design's "
              "expected data (loop/trust.py; - none in the range).", "",
              "| effect | parameter: fitted mean [90 %] (width / prior's) | gain | SE | tests better | p | held-out RMSE "
              "| cut / scatter | detectable from | verdict |", "|---|---|---|---|---|---|---|---|---|---|"]
@@ -148,7 +149,7 @@ def _interval_words(name, mean, interval, note):
         text += f" ({note['width_share']:.2f})"
         if note["at_edge"]:
             text += f" **at the {note['at_edge']} edge of its range**"
-        if note.get("holds_no_effect") is False:
+        if note.get("excludes_no_effect"):
             text += f", excludes the no-effect {note['no_effect']:.3g}"
     return text
 

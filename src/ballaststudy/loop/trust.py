@@ -19,6 +19,10 @@ from .select import choose, held_out_joint, held_out_plain
 
 GRID = 9            # parameter values per candidate the detectable size is read at
 EDGE_SHARE = 0.02   # an interval end this close to a bound (share of the range) is at the edge
+# an interval this share of the prior's 90 % width or wider is not read as excluding a value
+# or as pressing on an edge: it says little (a uniform posterior's 90 % interval never holds
+# a bound, and touches one by chance)
+INFORMATIVE = 0.5
 
 
 def _rms(v):
@@ -51,23 +55,25 @@ def discrepancy_rows(run):
 
 
 def interval_notes(name, mean, interval, material=None):
-    """Per parameter of effect ``name``: {at_edge: 'low' / 'high' / '' (an end within
-    EDGE_SHARE of a bound other than the no-effect value: the data ask for more than the range
-    allows), width_share: the
-    interval's width over the prior's 90 % width, no_effect: the value at which the effect
-    is off under the plain model's ``material`` values (None: no such value), holds_no_effect:
-    whether the interval holds it (None: no such value)}."""
+    """Per parameter of effect ``name``: {width_share: the interval's width over the prior's
+    90 % width, at_edge: 'low' / 'high' / '' (an informative interval, INFORMATIVE, with an
+    end within EDGE_SHARE of a bound other than the no-effect value: the data ask for more
+    than the range allows), no_effect: the value at which the effect is off under the plain
+    model's ``material`` values (None: no such value), excludes_no_effect: an informative
+    interval without it (None: no such value)}."""
     eff = MODIFIERS[name]
     off = eff.off(material or {}) if eff.off else {}
     notes = []
     for p, (lo, hi) in zip(eff.parameters, interval):
         span = p.high - p.low
         value = off.get(p.name)
+        share = float((hi - lo) / (0.9 * span))
         edge = "low" if lo - p.low < EDGE_SHARE * span else "high" if p.high - hi < EDGE_SHARE * span else ""
-        if edge and value == (p.low if edge == "low" else p.high):
-            edge = ""        # the bound is where the effect is off: no effect is an answer inside the range
-        notes.append(dict(parameter=p.name, at_edge=edge, width_share=float((hi - lo) / (0.9 * span)),
-                          no_effect=value, holds_no_effect=None if value is None else bool(lo <= value <= hi)))
+        if share >= INFORMATIVE or (edge and value == (p.low if edge == "low" else p.high)):
+            edge = ""        # wide, or at the bound where the effect is off: an answer inside the range
+        notes.append(dict(parameter=p.name, at_edge=edge, width_share=share, no_effect=value,
+                          excludes_no_effect=None if value is None else
+                          bool(not lo <= value <= hi and share < INFORMATIVE)))
     return notes
 
 
