@@ -3,6 +3,7 @@ the plain model is off per test, what that relates to, which effect helps on hel
 tests, what the long-term horizon implies); numbers from statistics.LoopStatistics."""
 import numpy as np
 
+from ..calibration.bayes import rmse
 from ..metrics.output import display_scale
 from ..scenario.mapping import mapping_markdown
 from ..scenario.modifiers import MODIFIERS
@@ -139,7 +140,10 @@ def _candidates(run, stats, scale, unit):
                      f"{_verdict_of(c, len(cands))} |")
     lines += [f"| {e} | - | - | - | - | - | - | - | not testable: no target declares {MODIFIERS[e].covariate} "
               "(its runs would be the plain model's), not run |" for e in run.selection.untestable]
-    return lines + ["", f"Plain model RMSE over all points: {scale * stats.plain_rmse:.3g} {unit} (nothing fitted: fitted = held out).", ""]
+    held = rmse(run.targets.y, run.plain.held.predicted)
+    return lines + ["", f"Plain model RMSE over all points: {scale * stats.plain_rmse:.3g} {unit}; held out (each test "
+                    f"with the discrepancy the other tests of its source estimate, as the candidates' held-out RMSE): "
+                    f"{scale * held:.3g} {unit}.", ""]
 
 
 def _interval_words(name, mean, interval, note):
