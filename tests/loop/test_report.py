@@ -238,3 +238,16 @@ def test_a_step_the_dem_reached_reproduced_everywhere():
     assert "| a | - | +1 | +2 [-5, 9] | 0/3 | yes |" in text
     assert "plain: reproduced on all 2 tests, with intervals 14 % wide against measured increments from 1 to 8 %" in text
     assert "The DEM horizon ends before" not in text
+
+
+def test_without_a_discrepancy_the_report_says_so():
+    """loop.discrepancy_terms: [] (the likelihood before issue 75): no terms, one line."""
+    run, stats = _chosen_run()
+    noise = run.noise
+    disc = make_discrepancy(TARGETS.y, TARGETS.point_cycle, TARGETS.point_test, ["planted", "planted"], ())
+    run = dataclasses.replace(run, noise=dataclasses.replace(noise, disc=disc),
+                              settings=SETTINGS | dict(discrepancy_terms=[]))
+    rows = discrepancy_rows(run)
+    assert rows[0]["terms"] == [] and rows[0]["plain"]["mean"] == []
+    text = report_markdown(run, dataclasses.replace(stats, discrepancy=rows))
+    assert "None estimated (`loop.discrepancy_terms: []`)" in text

@@ -244,6 +244,8 @@ def joint_loglik(resid, sd, covs, point_test, disc, dof):
 def source_beta(resid, covs, point_test, disc, dof):
     """Per source, beta's posterior given every test (the plain model's residuals resid
     (P,)): [(mean (q,), sd (q,))] (by the same nodes as the density)."""
+    if not disc.q:
+        return [(np.zeros(0), np.zeros(0))] * len(disc.sources)
     stats = per_test_stats(np.atleast_2d(resid), np.zeros((1, len(resid))), covs, point_test, disc.basis)
     out = []
     for s in range(len(disc.sources)):
