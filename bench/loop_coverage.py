@@ -17,7 +17,9 @@ value or, for a candidate not planted, does not exclude its no-effect value (an 
 half the prior's width or wider excludes nothing: loop/trust.py), the choice, the verdict, the
 smallest detectable effect) and OUT/coverage.csv (per planted effect and in all: truths,
 `coverage` of the 90 % intervals with its Clopper-Pearson 90 % interval, `false_choices`,
-the planted effect chosen, the intervals' width over the prior's), and prints the table.
+the planted effect chosen and the smallest planted value chosen, the largest missed, the
+intervals' width over the prior's), and prints the table. Each truth's rows also give the
+candidate's effect size (rms of its fitted curve minus the plain model's).
 
     python bench/loop_coverage.py OUT [--truths 30] [--none-share 0.34] [--cases 3]
         [--cycles 24] [--design-sets 9] [--pool 24] [--effects rate abrasion ...] [--jobs 2]
@@ -87,6 +89,8 @@ def truth_rows(t, loop_nc):
         candidates = json.loads(ds.attrs["candidates_json"])
         chosen, kind = ds.attrs["chosen"], ds.attrs["verdict_class"]
         detect = json.loads(ds.attrs["detectable_json"])
+        sizes = {name: e["effect_size"] for row in json.loads(ds.attrs["discrepancy_json"])
+                 for name, e in row["candidates"].items()}
     rows = []
     for c in candidates:
         (lo, hi), note = c["interval90"][0], c["interval_notes"][0]
@@ -98,7 +102,7 @@ def truth_rows(t, loop_nc):
                          against="planted" if planted else ("no_effect" if target is not None else ""),
                          holds="" if target is None else int(lo <= target <= hi if planted
                                                              else not note["excludes_no_effect"]),
-                         chosen=chosen, verdict=kind,
+                         chosen=chosen, verdict=kind, effect_size=sizes.get(c["effect"], float("nan")),
                          detectable=detect.get(c["effect"], {}).get("smallest", float("nan"))))
     return rows
 
@@ -124,13 +128,17 @@ def summary(rows):
         right = sum(t["chosen"] == t["planted"] for t in ts if t["planted"] != "none")
         k = sum(r["holds"] for r in own)
         lo, hi = _ci(k, len(own))
+        chosen_values = [t["value"] for t in ts if t["planted"] != "none" and t["chosen"] == t["planted"]]
+        missed_values = [t["value"] for t in ts if t["planted"] != "none" and t["chosen"] != t["planted"]]
         out.append(dict(planted=g, truths=len(ts), coverage=k / len(own) if own else float("nan"),
                         coverage_lo=lo, coverage_hi=hi,
                         no_effect_coverage=sum(r["holds"] for r in off) / len(off) if off else float("nan"),
                         false_choices=false, false_choice_rate=false / len(ts) if ts else float("nan"),
                         chosen_right=right, width_share=float(np.mean([r["width_share"] for r in own]))
                         if own else float("nan"),
-                        none_truths=sum(t["planted"] == "none" for t in ts)))
+                        none_truths=sum(t["planted"] == "none" for t in ts),
+                        smallest_value_chosen=min(chosen_values, default=float("nan")),
+                        largest_value_missed=max(missed_values, default=float("nan"))))
     return out
 
 
