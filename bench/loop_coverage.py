@@ -44,6 +44,7 @@ sys.path.insert(0, str(ROOT))        # the planted scenarios are a test helper (
 from tests.loop.synthetic import SCENARIO_BASE, SCENARIO_TESTS, plant, run_loop, scenario_setup  # noqa: E402
 
 LEVEL = 0.9
+DEFAULT_EFFECTS = yaml.safe_load((ROOT / "config/config.yaml").read_text())["loop"]["effects"]
 
 
 def truth_plan(n, none_share, effects, pool, seed=0):
@@ -158,7 +159,8 @@ def parse():
     ap.add_argument("--cycles", type=int, default=24)
     ap.add_argument("--design-sets", type=int, default=9)
     ap.add_argument("--pool", type=int, default=24, help="fresh specimens the truths take in turn")
-    ap.add_argument("--effects", nargs="+", default=list(EFFECTS), choices=EFFECTS)
+    ap.add_argument("--effects", nargs="+", default=DEFAULT_EFFECTS, choices=EFFECTS,
+                    help="the candidates (default: the shipped config's loop.effects)")
     ap.add_argument("--jobs", type=int, default=2)
     return ap.parse_args()
 

@@ -198,9 +198,10 @@ def run_loop(folder, out, measured, conditions, specimens, jobs=2):
     out.mkdir(parents=True, exist_ok=True)
     if not (out / "cases").exists():
         (out / "cases").symlink_to((folder / "cases").resolve())
-    main(["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens", *map(str, specimens),
-          "--parameters", str(folder / "base.yaml"), "--out-dir", str(out), "--jobs", str(jobs), "--config",
-          str(folder / "config.yaml"), "--quiet"])
+    if main(["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens", *map(str, specimens),
+             "--parameters", str(folder / "base.yaml"), "--out-dir", str(out), "--jobs", str(jobs), "--config",
+             str(folder / "config.yaml"), "--quiet"]):
+        raise RuntimeError(f"ballaststudy loop refused the planted tests in {out} (its one line above)")
     return out
 
 
