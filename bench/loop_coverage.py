@@ -13,10 +13,12 @@ by every truth (common random numbers); only the truths are new runs. Truths are
 order and each is written as it ends, so an interrupted run resumes where it stopped.
 
 Writes OUT/truths.csv (per truth and candidate: the interval, whether it holds the planted
-value or, for a candidate not planted, does not exclude its no-effect value (an interval
-half the prior's width or wider excludes nothing: loop/trust.py), the choice, the verdict, the
-smallest detectable effect) and OUT/coverage.csv (per planted effect and in all: truths,
-`coverage` of the 90 % intervals with its Clopper-Pearson 90 % interval, `false_choices`,
+value or, for a candidate of a truth with nothing planted, does not exclude its no-effect
+value (an interval half the prior's width or wider excludes nothing: loop/trust.py), the choice, the verdict, the
+smallest detectable effect, how far the truth's specimens stray from the loop's, `unlike`
+beyond loop/trust.py's limit) and OUT/coverage.csv (per planted effect and in all: truths,
+`coverage` of the 90 % intervals with its Clopper-Pearson 90 % interval, the same among the
+truths whose specimens the report did not call unlike ours, `false_choices`,
 the planted effect chosen and the smallest planted value chosen, the largest missed, the
 intervals' width over the prior's), and prints the table. Each truth's rows also give the
 candidate's effect size (rms of its fitted curve minus the plain model's).
@@ -37,6 +39,7 @@ import yaml
 from scipy.stats import binomtest
 
 from ballaststudy.loop.select import ALPHA
+from ballaststudy.loop.trust import STRAY_LIMIT
 from ballaststudy.scenario.modifiers import EFFECTS, MODIFIERS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,13 +93,16 @@ def truth_rows(t, loop_nc):
         candidates = json.loads(ds.attrs["candidates_json"])
         chosen, kind = ds.attrs["chosen"], ds.attrs["verdict_class"]
         detect = json.loads(ds.attrs["detectable_json"])
+        stray = json.loads(ds.attrs.get("specimen_stray_json", "{}")).get("ratio", float("nan"))
         sizes = {name: e["effect_size"] for row in json.loads(ds.attrs["discrepancy_json"])
                  for name, e in row["candidates"].items()}
     rows = []
     for c in candidates:
         (lo, hi), note = c["interval90"][0], c["interval_notes"][0]
         planted = c["effect"] == t["planted"]
-        target = t["value"] if planted else note["no_effect"]
+        # a candidate's no-effect value is the truth only where nothing is planted: under another
+        # planted effect it may rightly move to mimic it
+        target = t["value"] if planted else note["no_effect"] if t["planted"] == "none" else None
         rows.append(dict(truth=t["truth"], planted=t["planted"], value=t["value"], specimens=t["specimens"],
                          candidate=c["effect"], mean=c["mean"][0], lo=lo, hi=hi,
                          width_share=note["width_share"], at_edge=note["at_edge"],
@@ -104,7 +110,8 @@ def truth_rows(t, loop_nc):
                          holds="" if target is None else int(lo <= target <= hi if planted
                                                              else not note["excludes_no_effect"]),
                          chosen=chosen, verdict=kind, effect_size=sizes.get(c["effect"], float("nan")),
-                         detectable=detect.get(c["effect"], {}).get("smallest", float("nan"))))
+                         detectable=detect.get(c["effect"], {}).get("smallest", float("nan")),
+                         stray=stray, unlike=int(stray > STRAY_LIMIT)))
     return rows
 
 
@@ -131,8 +138,10 @@ def summary(rows):
         lo, hi = _ci(k, len(own))
         chosen_values = [t["value"] for t in ts if t["planted"] != "none" and t["chosen"] == t["planted"]]
         missed_values = [t["value"] for t in ts if t["planted"] != "none" and t["chosen"] != t["planted"]]
+        alike = [r for r in own if not r["unlike"]]
         out.append(dict(planted=g, truths=len(ts), coverage=k / len(own) if own else float("nan"),
-                        coverage_lo=lo, coverage_hi=hi,
+                        coverage_lo=lo, coverage_hi=hi, unlike=sum(t["unlike"] for t in ts),
+                        coverage_alike=sum(r["holds"] for r in alike) / len(alike) if alike else float("nan"),
                         no_effect_coverage=sum(r["holds"] for r in off) / len(off) if off else float("nan"),
                         false_choices=false, false_choice_rate=false / len(ts) if ts else float("nan"),
                         chosen_right=right, width_share=float(np.mean([r["width_share"] for r in own]))
@@ -193,5 +202,5 @@ if __name__ == "__main__":
           f"nominal false-choice rate: at most {ALPHA:g} (Bonferroni over {len(args.effects)} candidates)")
     for r in table:
         print(f"{r['planted']:13s} truths {r['truths']:3d}  coverage {r['coverage']:.2f} [{r['coverage_lo']:.2f}, "
-              f"{r['coverage_hi']:.2f}]  no-effect coverage {r['no_effect_coverage']:.2f}  false choices "
+              f"{r['coverage_hi']:.2f}] (specimens alike: {r['coverage_alike']:.2f}, unlike: {r['unlike']})  no-effect coverage {r['no_effect_coverage']:.2f}  false choices "
               f"{r['false_choices']}/{r['truths']}  chosen right {r['chosen_right']}  width/prior {r['width_share']:.2f}")

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from ballaststudy.loop.discrepancy import make_discrepancy
-from ballaststudy.loop.select import NoiseModel, Sampled, residual_dof, scatter_mse
-from ballaststudy.loop.trust import detectable, interval_notes, verdict
+from ballaststudy.loop.select import NoiseModel, Sampled, held_out_plain, residual_dof, scatter_mse
+from ballaststudy.loop.trust import STRAY_LIMIT, detectable, interval_notes, specimen_stray, verdict
 
 TESTS, SD = 7, 3e-4
 FREQ = np.array([5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0])
@@ -27,7 +27,8 @@ def _run(pattern):
     disc = make_discrepancy(plain, n, point_test, ["lab"] * TESTS)
     noise = NoiseModel(covs, covs, disc, residual_dof(3), scatter_mse(covs, point_test, disc))
     sampled = Sampled(samples, mean, np.zeros_like(mean), np.full(len(samples), 1 / len(samples)))
-    return SimpleNamespace(noise=noise, targets=SimpleNamespace(point_test=point_test),
+    y = plain + np.random.default_rng(0).normal(0.0, SD, len(n))     # measured: no effect, the noise
+    return SimpleNamespace(noise=noise, targets=SimpleNamespace(point_test=point_test, y=y),
                            plain=SimpleNamespace(prediction=plain),
                            selection=SimpleNamespace(candidates={"fouling": SimpleNamespace(sampled=sampled)}))
 
@@ -54,6 +55,33 @@ def test_the_verdicts_classes():
     kind, words = verdict(None, {"a": seen, "b": blind}, ["a", "b"])
     assert kind == "partly" and "cannot tell for b" in words
     assert verdict(None, {}, [])[0] == "no candidates"
+    far, near = dict(ratio=2 * STRAY_LIMIT, rms=1.0, scatter=0.5 / STRAY_LIMIT), dict(ratio=1.0, rms=1.0, scatter=1.0)
+    assert verdict(None, {"a": seen}, ["a"], far)[0] == "cannot tell"
+    assert verdict(None, {"a": seen}, ["a"], near)[0] == "no effect needed"
+    kind, words = verdict("a", {"a": seen}, ["a"], far)
+    assert kind == "chosen" and "Read with care" in words
+
+
+def _stray(offset_sd, seed):
+    """specimen_stray of 7 tests whose measured specimen is off by its own offset of sd
+    ``offset_sd`` from the model's, with the noise model's noise (SD) on top."""
+    run = _run(lambda t, n: np.zeros_like(n))
+    rng = np.random.default_rng(seed)
+    pt = run.targets.point_test
+    y = run.plain.prediction + rng.normal(0.0, offset_sd, TESTS)[pt] + rng.normal(0.0, SD, len(pt))
+    noise = run.noise
+    held = held_out_plain(run.plain.prediction[None], y, pt, noise.plain_covs, noise.dof, noise.disc)
+    run.targets.y, run.plain.held = y, held
+    return specimen_stray(run)["ratio"]
+
+
+def test_specimens_like_ours_do_not_stray_and_unlike_ones_do():
+    """Measured curves drawn from the noise model itself: the ratio about 1 (20 seeds: all
+    under 1.6, none beyond the limit); each test's specimen off by 10 x the scatter: beyond
+    it in every seed."""
+    alike = [_stray(0.0, s) for s in range(20)]
+    assert max(alike) < 1.6 and 0.6 < np.median(alike) < 1.3, alike
+    assert min(_stray(10 * SD, s) for s in range(20)) > STRAY_LIMIT
 
 
 @pytest.mark.parametrize("interval, edge", [([0.195, 0.1999], "high"), ([0.0, 0.03], ""), ([0.05, 0.1], "")])
@@ -74,6 +102,9 @@ def test_the_no_effect_value_is_the_plain_models():
     assert interval_notes("end_restraint", [0.58], [[0.56, 0.60]], {"mu": 0.59})[0]["excludes_no_effect"] is False
     assert interval_notes("abrasion", [0.01], [[0.0, 0.02]])[0]["no_effect"] == 0.0
     assert interval_notes("rate", [0.45], [[0.44, 0.46]])[0]["excludes_no_effect"] is None
+    # pressed on the no-effect bound: its 5 % tail cannot reach the bound, the value is held
+    assert interval_notes("fouling", [1.7e-4], [[1.6e-4, 2.3e-4]])[0]["excludes_no_effect"] is False
+    assert interval_notes("fouling", [0.05], [[0.04, 0.06]])[0]["excludes_no_effect"] is True
 
 
 def test_a_wide_interval_excludes_nothing_and_presses_on_no_edge():

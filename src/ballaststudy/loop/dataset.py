@@ -34,6 +34,7 @@ def loop_dataset(run, stats):
                "tests_json": json.dumps(stats.before), "covariate_tests_json": json.dumps(stats.covariates),
                "candidates_json": json.dumps(stats.candidates), "chosen": sel.chosen or "none",
                "verdict_class": stats.verdict[0], "verdict": stats.verdict[1],
+               "specimen_stray_json": json.dumps(stats.stray or {}), "specimen_stray_units": units,
                "discrepancy_json": json.dumps(stats.discrepancy), "discrepancy_units": units,
                "detectable_json": json.dumps(stats.detectable or {}), "detectable_units": units,
                "frequency_step_json": json.dumps(stats.step), "frequency_step_units": units,

@@ -19,7 +19,7 @@ from .discrepancy import source_name
 from .horizon import measured_curve
 from .residual import covariate_tests, residual, summary
 from .step import shared_runs, step_rows
-from .trust import detectable, discrepancy_rows, interval_notes, verdict
+from .trust import detectable, discrepancy_rows, interval_notes, specimen_stray, verdict
 
 COVARIATES = ("frequency_Hz", "confining_pressure_kPa", "deviator_max_kPa", "VCI")
 # the plain model's internal signals at its last simulated cycle (mean over the cases)
@@ -54,6 +54,7 @@ class LoopStatistics:
     discrepancy: list = ()     # trust.discrepancy_rows: per source, beside each effect's size
     detectable: dict = None    # trust.detectable: {effect: the smallest effect the rule would choose}
     verdict: tuple = ("", "")  # trust.verdict: (class, sentence)
+    stray: dict = None         # trust.specimen_stray: the measured specimens against the model's
 
     @property
     def chosen_row(self):
@@ -74,6 +75,7 @@ def loop_statistics(run):
     after = per_test_rows(run.targets, sel.after["curves"], lp["measurement_sd"]) if sel.after is not None else None
     beyond = [points_beyond(path, lp["quantity"], lp["cycles"]) for path in run.targets.measured]
     detect = detectable(run) if run.noise is not None else {}
+    stray = specimen_stray(run) if run.noise is not None else None
     return LoopStatistics(
         before=before, after=after,
         covariates=[r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)],
@@ -86,7 +88,7 @@ def loop_statistics(run):
                        step_models(run), lp["cycles"], lp["measurement_sd"]),
         step_shared=shared_runs(run.plain.runs["cases"]),
         discrepancy=discrepancy_rows(run) if run.noise is not None else [], detectable=detect,
-        verdict=verdict(sel.chosen, detect, list(sel.candidates)))
+        verdict=verdict(sel.chosen, detect, list(sel.candidates), stray), stray=stray)
 
 
 def step_models(run):
