@@ -178,6 +178,8 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
     cfg = yaml.safe_load(Path(config_file).read_text())
     cfg["databases_file"] = str(Path(config_file).parent / cfg["databases_file"])
     cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
+    sets = cfg["specimens"]
+    sets[cfg["loop"]["specimens"]]["cases"] = max(cases, sets[cfg["loop"]["specimens"]]["cases"])
     cfg["loop"].update(cases=cases, cycles=cycles, design_sets=design_sets, refine_rounds=refine_rounds,
                        refine_sets=refine_sets, measurement_sd=1e-5,
                        posterior_samples=4096, specimen_share=float(specimen_share))
