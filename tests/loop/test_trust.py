@@ -55,7 +55,8 @@ def test_the_verdicts_classes():
     kind, words = verdict(None, {"a": seen, "b": blind}, ["a", "b"])
     assert kind == "partly" and "cannot tell for b" in words
     assert verdict(None, {}, [])[0] == "no candidates"
-    far, near = dict(ratio=2 * STRAY_LIMIT, rms=1.0, scatter=0.5 / STRAY_LIMIT), dict(ratio=1.0, rms=1.0, scatter=1.0)
+    far = dict(model="plain", ratio=2 * STRAY_LIMIT, rms=1.0, scatter=0.5 / STRAY_LIMIT)
+    near = dict(model="plain", ratio=1.0, rms=1.0, scatter=1.0)
     assert verdict(None, {"a": seen}, ["a"], far)[0] == "cannot tell"
     assert verdict(None, {"a": seen}, ["a"], near)[0] == "no effect needed"
     kind, words = verdict("a", {"a": seen}, ["a"], far)
@@ -72,6 +73,7 @@ def _stray(offset_sd, seed):
     noise = run.noise
     held = held_out_plain(run.plain.prediction[None], y, pt, noise.plain_covs, noise.dof, noise.disc)
     run.targets.y, run.plain.held = y, held
+    run.selection.chosen = None
     return specimen_stray(run)["ratio"]
 
 
@@ -113,3 +115,22 @@ def test_a_wide_interval_excludes_nothing_and_presses_on_no_edge():
     (note,) = interval_notes("abrasion", [0.1], [[0.01, 0.19]])
     assert note["excludes_no_effect"] is False and note["at_edge"] == "" and note["width_share"] == pytest.approx(1.0)
     assert interval_notes("rate", [0.63], [[0.27, 0.699]])[0]["at_edge"] == ""
+
+
+def test_a_chosen_effect_is_judged_by_its_own_held_out_residual():
+    """Curves made with an effect of rms 14 x the noise (the plain model's held-out rms, with
+    what the shared discrepancy takes, 7.6 x the scatter): the plain model strays beyond the limit; the chosen effect, predicting each
+    held-out test as made, does not."""
+    pattern = lambda t, n: 0.012 * FREQ[t] / 60 * np.log(n) / np.log(200)     # noqa: E731
+    run = _run(pattern)
+    pt, noise = run.targets.point_test, run.noise
+    made = run.plain.prediction + pattern(pt, np.tile(np.geomspace(1, 200, 12), TESTS))
+    y = made + np.random.default_rng(1).normal(0.0, SD, len(pt))
+    run.targets.y = y
+    run.plain.held = held_out_plain(run.plain.prediction[None], y, pt, noise.plain_covs, noise.dof, noise.disc)
+    run.selection.chosen = None
+    assert specimen_stray(run)["ratio"] > STRAY_LIMIT
+    run.selection.chosen = "fouling"
+    run.selection.candidates["fouling"].held = SimpleNamespace(predicted=made)
+    stray = specimen_stray(run)
+    assert stray["model"] == "fouling" and stray["ratio"] < 1.6, stray

@@ -114,39 +114,44 @@ def detectable(run):
 
 
 def specimen_stray(run):
-    """{ratio, rms, scatter}: the plain model's held-out rms residual (each test predicted
-    with what the other tests of its source say of the discrepancy) over the root of the
-    scatter its noise model expects there (the K specimens', the measurement's, what the
-    other tests leave of the discrepancy). Above STRAY_LIMIT the measured specimens stray
-    from the model's far beyond its specimens' scatter: the likelihood's noise rests on
-    specimens like ours, and a candidate that moves the curves the way the measured
-    specimens differ fits them precisely (bench/loop_coverage.py: fresh 24-stone specimens
-    strain 10 to 8000 x the loop's 3, and intervals a few per cent wide exclude the
-    no-effect value). Why not estimate how far they stray (a term per test with its sd
-    estimated, a random effect): tried, on the formula model of tests/loop/test_coverage.py
-    it widened rate's intervals 4 to 9 x at no gain in coverage, and on DEM truths the
-    intervals still excluded the no-effect values - a candidate that softens the model
-    explains softer specimens whatever their scatter is called."""
-    noise, point_test = run.noise, run.targets.point_test
-    rms = _rms(run.targets.y - run.plain.held.predicted)
+    """{model, ratio, rms, scatter}: the held-out rms residual of the chosen effect (the
+    plain model where none is chosen; each test predicted with what the other tests of its
+    source say of the discrepancy) over the root of the scatter the noise model expects
+    there (the K specimens', the measurement's, what the other tests leave of the
+    discrepancy). About 1 where the measured curves are like the model's; above STRAY_LIMIT
+    they stray far beyond its specimens' scatter - specimens unlike ours, or an effect no
+    candidate makes - and the likelihood's noise, which rests on specimens like ours, does
+    not hold: a candidate that moves the curves the way the measured specimens differ fits
+    them precisely (bench/loop_coverage.py: fresh 24-stone specimens strain 10 to 8000 x the
+    loop's 3, and intervals a few per cent wide exclude the no-effect value). Why not
+    estimate how far they stray (a term per test with its sd estimated, a random effect):
+    tried; on the formula model of tests/loop/test_coverage.py it widened rate's intervals 4
+    to 9 x at no gain in coverage, and on DEM truths the intervals still excluded the
+    no-effect values - a candidate that softens the model explains softer specimens
+    whatever their scatter is called."""
+    noise, point_test, chosen = run.noise, run.targets.point_test, run.selection.chosen
+    held = run.selection.candidates[chosen].held if chosen else run.plain.held
+    rms = _rms(run.targets.y - held.predicted)
     scatter = float(np.sqrt(scatter_mse(noise.plain_covs, point_test, noise.disc)))
-    return dict(ratio=rms / scatter if scatter > 0 else float("inf"), rms=rms, scatter=scatter)
+    return dict(model=chosen or "plain", ratio=rms / scatter if scatter > 0 else float("inf"), rms=rms,
+                scatter=scatter)
 
 
 def verdict(chosen, detect, candidates, stray=None):
     """(class, sentence): 'chosen', 'no effect needed', 'cannot tell', or 'no effect needed
     among some, cannot tell for the others' ({effect: detectable row}; candidates: the
-    names tried; stray: specimen_stray, beyond STRAY_LIMIT 'cannot tell' unless chosen,
-    and a chosen effect said to be read with care)."""
+    names tried; stray: specimen_stray, beyond STRAY_LIMIT 'cannot tell' where none is
+    chosen, and a chosen effect said to be read with care)."""
     unlike = stray is not None and stray["ratio"] > STRAY_LIMIT
-    words = (f"the measured specimens stray from the model's by {stray['ratio']:.3g} x the scatter of its own "
-             f"specimens (held-out rms {stray['rms']:.3g} against {stray['scatter']:.3g})") if unlike else ""
+    words = (f"the measured curves stray from the {stray['model']} model's by {stray['ratio']:.3g} x the scatter "
+             f"of its own specimens (held-out rms {stray['rms']:.3g} against {stray['scatter']:.3g}): specimens "
+             "unlike ours, or an effect no candidate makes") if unlike else ""
     if chosen:
         return "chosen", f"Effect chosen: {chosen}." + (
-            f" Read with care: {words}; the effect may stand for what makes them unlike ours." if unlike else "")
+            f" Read with care: even with it {words}." if unlike else "")
     if unlike and candidates:
         return "cannot tell", (f"These data cannot tell: {words}. The intervals rest on specimens like ours and are "
-                               "no evidence for or against an effect; more or larger simulated specimens would tell.")
+                               "no evidence for or against an effect.")
     seen = [n for n in candidates if n in detect and np.isfinite(detect[n]["smallest"])]
     blind = [n for n in candidates if n not in seen]
     if not candidates:
