@@ -20,7 +20,7 @@ from ballaststudy.loop.plots import _panel, plot_curves
 from ballaststudy.loop.report import chosen_doc
 from ballaststudy.loop.discrepancy import make_discrepancy
 from ballaststudy.loop.select import ALPHA, HeldOut, NoiseModel, Sampled, scatter_mse
-from ballaststudy.loop.trust import detectable, discrepancy_rows, verdict
+from ballaststudy.loop.trust import detectable, discrepancy_rows, specimen_stray, verdict
 from ballaststudy.loop.accumulation import LawFit
 from ballaststudy.loop.horizon import LongTermLaw
 from ballaststudy.loop.statistics import LongTerm, LoopStatistics, candidate_rows, long_term, step_models
@@ -112,7 +112,7 @@ def _chosen_run():
     stats = LoopStatistics(rows, [r | dict(rmse=1e-4) for r in rows], [], candidate_rows(selection, TARGETS),
                            [no_fit] * 2, [no_fit] * 2, rmse(TARGETS.y, plain_model.prediction), step,
                            shared_runs(plain["cases"]), discrepancy_rows(run), detect,
-                           verdict("end_restraint", detect, ["end_restraint"]))
+                           verdict("end_restraint", detect, ["end_restraint"], specimen_stray(run)), specimen_stray(run))
     return run, stats
 
 
@@ -143,6 +143,9 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert "| planted | plain |" in text and "| planted | end_restraint |" in text
     assert ds.attrs["verdict_class"] == "chosen" and json.loads(ds.attrs["discrepancy_json"])[0]["source"] == "planted"
     assert "Stress mapping: **none**" in text
+    stray = json.loads(ds.attrs["specimen_stray_json"])
+    assert stray["model"] == "end_restraint" and stray["ratio"] == pytest.approx(stray["rms"] / stray["scatter"])
+    assert f"the end_restraint model's held-out RMSE {100 * stray['rms']:.3g} %" in text
     assert "likelihood: multivariate t with dof = 1 (K - 1:" in text
     assert "16 DEM cases, 14 runs from 10 first loadings (" in text and "; 0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
     assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] (0.19), excludes the no-effect 0.7 |" in text

@@ -11,6 +11,7 @@ from .select import ALPHA, likelihood_words
 from .horizon import STATED_QUANTILE
 from .statistics import SIGNALS
 from .step import LEVEL, STEP_CYCLES
+from .trust import STRAY_LIMIT
 
 
 def report_markdown(run, stats):
@@ -143,7 +144,19 @@ def _candidates(run, stats, scale, unit):
     held = rmse(run.targets.y, run.plain.held.predicted)
     return lines + ["", f"Plain model RMSE over all points: {scale * stats.plain_rmse:.3g} {unit}; held out (each test "
                     f"with the discrepancy the other tests of its source estimate, as the candidates' held-out RMSE): "
-                    f"{scale * held:.3g} {unit}.", ""]
+                    f"{scale * held:.3g} {unit}.", ""] + _stray(stats, scale, unit)
+
+
+def _stray(stats, scale, unit):
+    """How far the measured curves stray from the model's specimens (trust.specimen_stray)."""
+    s = stats.stray
+    if not s:
+        return []
+    return [f"The measured curves against the model's own specimens: the {s['model']} model's held-out RMSE "
+            f"{scale * s['rms']:.3g} {unit} over the root of the scatter its noise model expects "
+            f"({scale * s['scatter']:.3g} {unit}): **{s['ratio']:.3g}** (about 1 where the measured specimens are "
+            f"like the model's; beyond {STRAY_LIMIT:g} they are not, or an effect no candidate makes is there, and the "
+            "intervals, which rest on specimens like ours, are no evidence).", ""]
 
 
 def _interval_words(name, mean, interval, note):
