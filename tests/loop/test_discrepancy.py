@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ballaststudy.loop.discrepancy import (beta_posterior, held_out_variance, joint_loglik, loglik, make_discrepancy,
-                                           source_beta, per_test_stats)
+from ballaststudy.loop.discrepancy import (_test_logpdf, beta_posterior, held_out_variance, joint_loglik, loglik,
+                                           make_discrepancy, per_test_stats, source_beta, surrogate_shape)
 
 
 def _problem(seed, sources=("a", "a", "b", "a", "b")):
@@ -140,3 +140,27 @@ def test_the_prior_scale_is_the_larger_of_the_measured_and_the_models_quantity()
     y, n, pt = np.full(6, 0.01), np.tile([1.0, 5.0, 10.0], 2), np.repeat([0, 1], 3)
     assert make_discrepancy(y, n, pt, ["a", "a"]).prior_sd[0, 0] == pytest.approx(0.01)
     assert make_discrepancy(y, n, pt, ["a", "a"], model=np.full(6, 0.07)).prior_sd[0, 0] == pytest.approx(0.07)
+
+
+def test_the_surrogates_error_runs_along_the_curve():
+    """surrogate_shape: the design sets' mean curves' covariance per test, mean diagonal 1,
+    of their rank (J - 1) but for a ridge; per_test_stats with it is the dense t of the test's
+    covariance plus sd^2 x shape (sd one value per test and sample)."""
+    rng = np.random.default_rng(6)
+    point_test = np.repeat([0, 1], [5, 4])
+    sets = rng.normal(0, 1e-3, (4, 9))
+    shape = surrogate_shape(sets, point_test)
+    for t, c in shape.items():
+        assert np.mean(np.diag(c)) == pytest.approx(1.0, rel=1e-5)
+        assert np.sum(np.linalg.eigvalsh(c) > 1e-3) == 3
+    covs = {0: 1e-8 * np.eye(5), 1: 2e-8 * np.eye(4)}
+    resid, sd = rng.normal(0, 1e-4, (2, 9)), np.repeat([[3e-4, 1e-4]], 2, axis=0)[:, point_test]
+    disc = make_discrepancy(np.ones(9), np.arange(1.0, 10.0), point_test, ["a", "a"])
+    stats_ = per_test_stats(resid, sd, covs, point_test, disc.basis, shape)
+    for t in (0, 1):
+        sel = point_test == t
+        for m in range(2):
+            full = covs[t] + sd[m, sel][:, None] * sd[m, sel][None] * shape[t]
+            dense = stats.multivariate_t(np.zeros(sel.sum()), full, df=2.0).logpdf(resid[m, sel])
+            s = stats_[t]
+            assert _test_logpdf(s.quad[m], s.logdet[m], s.n, 2.0) == pytest.approx(dense, abs=1e-9)

@@ -111,13 +111,18 @@ class TestTerms:
     xdr: np.ndarray         # (M, q) X^T D^-1 r
 
 
-def per_test_stats(resid, sd, covs, point_test, basis):
+def per_test_stats(resid, sd, covs, point_test, basis, shape=None):
     """[TestTerms per test of covs' order] of residuals resid (M, P) under {test: covariance}
-    plus the surrogate's variance sd (M, P) on the diagonal."""
+    plus the surrogate's variance sd (M, P): on the diagonal, or with ``shape`` {test: (P_t,
+    P_t)} (surrogate_shape) sd^2 times it (the surrogate's error along the curve)."""
     out = []
     for t, cov in covs.items():
         sel = np.asarray(point_test) == t
-        full = cov[None] + np.eye(sel.sum())[None] * (sd[:, sel] ** 2)[:, :, None]
+        if shape is None:
+            full = cov[None] + np.eye(sel.sum())[None] * (sd[:, sel] ** 2)[:, :, None]
+        else:
+            s = sd[:, sel]
+            full = cov[None] + s[:, :, None] * s[:, None, :] * shape[t][None]
         chol = np.linalg.cholesky(full)
         rhs = np.concatenate([resid[:, sel, None], np.broadcast_to(basis[sel], (len(resid), *basis[sel].shape))],
                              axis=2)
@@ -126,6 +131,21 @@ def per_test_stats(resid, sd, covs, point_test, basis):
         out.append(TestTerms(int(sel.sum()), np.sum(zr ** 2, axis=1),
                              2 * np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1),
                              np.einsum("mpi,mpj->mij", zx, zx), np.einsum("mpi,mp->mi", zx, zr)))
+    return out
+
+
+def surrogate_shape(set_means, point_test):
+    """{test: (P_t, P_t)} the correlation of the surrogate's error along a test's curve: how
+    the design sets' mean curves (J, P) vary about their mean, scaled to a mean diagonal of
+    1 (an error shaped like the differences the parameter makes; where the sets do not
+    differ, the identity)."""
+    dev = np.asarray(set_means, float) - np.mean(set_means, axis=0)
+    out = {}
+    for t in np.unique(point_test):
+        d = dev[:, np.asarray(point_test) == t]
+        c = d.T @ d / max(len(d) - 1, 1)
+        scale = np.mean(np.diag(c))
+        out[t] = c / scale + 1e-6 * np.eye(len(c)) if scale > 0 else np.eye(len(c))
     return out
 
 
@@ -216,17 +236,17 @@ class JointLoglik:
         return self.full[:, None] - self.without
 
 
-def loglik(resid, sd, covs, point_test, disc, dof):
+def loglik(resid, sd, covs, point_test, disc, dof, shape=None):
     """(M,) log p(y | theta) of residuals resid (M, P) alone (joint_loglik's ``full``)."""
-    stats = per_test_stats(resid, sd, covs, point_test, disc.basis)
+    stats = per_test_stats(resid, sd, covs, point_test, disc.basis, shape)
     return sum(source_logpdf([stats[j] for j in range(len(stats)) if disc.test_source[j] == s], disc.prior_sd[s],
                              dof)[0] for s in range(len(disc.sources)))
 
 
-def joint_loglik(resid, sd, covs, point_test, disc, dof):
+def joint_loglik(resid, sd, covs, point_test, disc, dof, shape=None):
     """JointLoglik of residuals resid (M, P) (sd (M, P) the surrogate's) under the test
     covariances {test: (P_t, P_t)} in test order and the Discrepancy disc."""
-    stats = per_test_stats(resid, sd, covs, point_test, disc.basis)
+    stats = per_test_stats(resid, sd, covs, point_test, disc.basis, shape)
     m, tests = len(resid), len(stats)
     per_source = {s: [j for j in range(tests) if disc.test_source[j] == s] for s in range(len(disc.sources))}
     logpdf = {s: source_logpdf([stats[j] for j in js], disc.prior_sd[s], dof)[0] for s, js in per_source.items()}

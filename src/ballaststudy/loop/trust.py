@@ -102,7 +102,7 @@ def detectable(run):
         for v in values:
             at = int(np.argmin(np.abs(s.samples[:, 0] - v)))
             expected = s.mean[at]
-            joint = joint_loglik(expected[None] - s.mean, s.sd, noise.covs, point_test, noise.disc, noise.dof)
+            joint = joint_loglik(expected[None] - s.mean, s.sd, noise.covs, point_test, noise.disc, noise.dof, s.shape)
             held = held_out_joint(s.samples, s.mean, joint, point_test, noise.disc)
             plain = held_out_plain(plain_mean[None], expected, point_test, noise.plain_covs, noise.dof, noise.disc)
             chosen, _ = choose({name: (held, plain)}, expected, noise.scatter, tried)
