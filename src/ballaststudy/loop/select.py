@@ -31,6 +31,22 @@ stiffer all along): independent points would count one specimen's offset many ti
 Covariances are shrunk towards their diagonal (calibration.bayes.shrunk) so that they stay
 positive definite with few cases.
 
+  a lab test (specimen_share > 0): the measured specimen scatters like share x one model
+      specimen, and the ensemble mean misses the model's own mean by 1/K of that:
+      (share + 1/K) x the plain ensemble's case-to-case covariance + the measurement's.
+  model-made data on the model's own specimens (specimen_share = 0, common random
+      numbers): the measured curve is one run of these specimens, no specimen's offset
+      separates it from the model's. What remains is chaos: a run and the same run from a
+      state perturbed by round-off part ways (DEM is chaotic), so the ensemble mean at a
+      parameter value scatters by chaos / K about its smooth trend: the measured curve
+      carries one such draw, the plain ensemble's mean another (so the plain model is
+      judged under twice C / K), a candidate's surrogate its own variance instead. The
+      chaos covariance C comes from the plain ensemble run twice, the second time from
+      infinitesimally perturbed velocities (chaos_covariance): half the covariance of
+      the difference.
+      The case-to-case covariance would be far too wide here (on 24-stone specimens a
+      specimen's offset is as large as the mean strain; the chaos a fraction of it).
+
 The surrogate's variance is one error along each test's curve, shaped as the design sets'
 mean curves differ from each other (discrepancy.surrogate_shape), of one size for every
 parameter value (the GP's variance averaged over the prior sample). Why: the calibration's
