@@ -24,8 +24,8 @@ EDGE_SHARE = 0.02   # an interval end this close to a bound (share of the range)
 # or as pressing on an edge: it says little (a uniform posterior's 90 % interval never holds
 # a bound, and touches one by chance)
 INFORMATIVE = 0.5
-# the plain model's held-out rms residual over the root of the scatter its noise model
-# expects, beyond which the measured specimens are unlike the model's (about 1 where they are
+# the held-out rms residual over the root of the scatter the noise model expects, beyond
+# which the measured curves are unlike the model's (specimen_stray: about 1 where they are
 # alike; an rms over P points of a correct model exceeds 3 x its expectation essentially never)
 STRAY_LIMIT = 3.0
 
@@ -78,8 +78,8 @@ def interval_notes(name, mean, interval, material=None):
             edge = ""        # wide, or at the bound where the effect is off: an answer inside the range
         # an interval pressed on the bound that is the no-effect value holds it: its 5 % tail
         # cannot reach a bound the posterior piles up on (fouling 1.6e-4 [1.6e-4, 2.3e-4] of 0.9)
-        held = lo - EDGE_SHARE * span <= value <= hi + EDGE_SHARE * span if value in (p.low, p.high) \
-            else lo <= value <= hi if value is not None else None
+        reach = EDGE_SHARE * span if value in (p.low, p.high) else 0.0
+        held = value is not None and lo - reach <= value <= hi + reach
         notes.append(dict(parameter=p.name, at_edge=edge, width_share=share, no_effect=value,
                           excludes_no_effect=None if value is None else bool(not held and share < INFORMATIVE)))
     return notes
@@ -124,8 +124,8 @@ def specimen_stray(run):
     effect no candidate makes - and the likelihood's noise, which rests on specimens like
     ours, does not hold (the formula model of tests/loop/test_coverage.py, rate planted, 40
     draws: lab specimens like ours: median 1.04, none beyond, coverage 0.88; 5 x ours: 83 %
-    beyond, coverage 0.85; 20 x ours: all beyond, coverage 0.72): a candidate that moves the curves the way the measured specimens differ fits
-    them precisely (bench/loop_coverage.py: fresh 24-stone specimens strain 10 to 8000 x the
+    beyond, coverage 0.85; 20 x ours: all beyond, coverage 0.72): a candidate that moves the
+    curves the way the measured specimens differ fits them precisely (bench/loop_coverage.py: fresh 24-stone specimens strain 10 to 8000 x the
     loop's 3, and intervals a few per cent wide exclude the no-effect value). Why not
     estimate how far they stray (a term per test with its sd estimated, a random effect):
     tried; on the formula model of tests/loop/test_coverage.py it widened rate's intervals 4
