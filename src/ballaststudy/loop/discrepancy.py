@@ -113,16 +113,13 @@ class TestTerms:
 
 def per_test_stats(resid, sd, covs, point_test, basis, shape=None):
     """[TestTerms per test of covs' order] of residuals resid (M, P) under {test: covariance}
-    plus the surrogate's variance sd (M, P): on the diagonal, or with ``shape`` {test: (P_t,
-    P_t)} (surrogate_shape) sd^2 times it (the surrogate's error along the curve)."""
+    plus the surrogate's error of sd (M, P) with the correlation ``shape`` {test: (P_t, P_t)}
+    (surrogate_shape: along the curve; None: the identity, an error per point)."""
     out = []
     for t, cov in covs.items():
         sel = np.asarray(point_test) == t
-        if shape is None:
-            full = cov[None] + np.eye(sel.sum())[None] * (sd[:, sel] ** 2)[:, :, None]
-        else:
-            s = sd[:, sel]
-            full = cov[None] + s[:, :, None] * s[:, None, :] * shape[t][None]
+        s, corr = sd[:, sel], np.eye(sel.sum()) if shape is None else shape[t]
+        full = cov[None] + s[:, :, None] * s[:, None, :] * corr[None]
         chol = np.linalg.cholesky(full)
         rhs = np.concatenate([resid[:, sel, None], np.broadcast_to(basis[sel], (len(resid), *basis[sel].shape))],
                              axis=2)
