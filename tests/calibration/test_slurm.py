@@ -75,9 +75,20 @@ def test_slurm_workers_run_a_round_and_survive_a_cancelled_job(slurm, specimen, 
     same_cases(files, files_slurm)
 
 
+def _snakemake_start(cwd, *args):
+    """(the snakemake run, its log cwd/snakemake.log): a file, as a pipe left unread fills."""
+    log = Path(cwd) / "snakemake.log"
+    with open(log, "w") as out:
+        return subprocess.Popen(["snakemake", *args], cwd=cwd, stdout=out, stderr=subprocess.STDOUT), log
+
+
+def _snakemake_end(started):
+    run, log = started
+    assert run.wait() == 0, log.read_text()[-6000:]
+
+
 def _snakemake(cwd, *args):
-    out = subprocess.run(["snakemake", *args], cwd=cwd, capture_output=True, text=True)
-    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
+    _snakemake_end(_snakemake_start(cwd, *args))
 
 
 def _edit(path, change):
@@ -124,12 +135,13 @@ def test_snakemake_calibrate_on_slurm_ends_as_a_local_run(slurm, small_workflow,
     if os.path.realpath("/etc/slurm/slurm.conf") != os.path.realpath(slurm):
         pytest.skip("/etc/slurm/slurm.conf is another SLURM's (the plugin's steps read that path)")
     local, cluster = (shutil.copytree(small_workflow, tmp_path / name, symlinks=True) for name in ("local", "slurm"))
-    _snakemake(local, "--cores", "2", "calibrate")
+    local_run = _snakemake_start(local, "--cores", "2", "calibrate")   # beside the SLURM run: most of that is waiting
     _edit(cluster / "config" / "config.yaml", lambda cfg: cfg.update(executor=dict(
         kind="slurm", cores=2, memory_GB=4, walltime_min=10, maximum_jobs=2)))
     t0 = time.time()
     _snakemake(cluster, "--profile", "profiles/slurm", "--slurm-status-command", "squeue",
                "--slurm-init-seconds-before-status-checks", "5", "calibrate")
+    _snakemake_end(local_run)
     out = Path("results/calibration/sun_et_al_16/p60_q230_f5")
     jobs = len(list((cluster / out / "workers").glob("*.err")))
     print(f"snakemake calibrate on slurm: {time.time() - t0:.0f} s, 1 coordinator job, {jobs} worker job(s)")
