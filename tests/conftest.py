@@ -25,6 +25,10 @@ if os.environ.get("BALLASTSTUDY_TEST_GPU") != "real":
     os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
     numba.config.reload_config()
 
+from ballaststudy.measured.fetch import fetch  # noqa: E402
+
+from .measured.served import LOCAL_COPY, served  # noqa: E402
+
 MATERIALS = {"hard": {"mass_fraction": 0.7, "density_kg_m3": 2850.0},
              "soft": {"mass_fraction": 0.3, "density_kg_m3": 2620.0}}
 
@@ -72,3 +76,15 @@ def small_library(tmp_path_factory):
     path = tmp_path_factory.mktemp("bpm") / "BPM.nc"
     synthetic_library(24, size=(0.035, 0.065), r0=0.008, seed=3, database="tiny").to_netcdf(path)
     return path
+
+
+@pytest.fixture(scope="session")
+def measured_data_dir(tmp_path_factory):
+    """A measured.data_dir filled by `fetch`, the code path a user's `measured fetch` takes,
+    from the local copy of the source served over HTTP (skipped where there is none)."""
+    if not LOCAL_COPY.is_dir():
+        pytest.skip(f"no local copy of the measured curves' source at {LOCAL_COPY}")
+    data_dir = tmp_path_factory.mktemp("measured")
+    with served(LOCAL_COPY) as url:
+        fetch(data_dir, url)
+    return data_dir

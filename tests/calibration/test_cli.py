@@ -83,15 +83,13 @@ def test_calibrate_checks_before_any_case(measured_target, tmp_path, capsys):
     assert not any(out.rglob("*"))
 
 
-def test_study_follows_the_calibration_when_asked(tmp_path):
+def test_study_follows_the_calibration_when_asked(tmp_path, measured_data_dir):
     """study.parameters: calibrated -> every box case run depends on the calibrate target's
     calibrated.yaml (so the study reruns when the calibration changes)."""
     _copy_workflow(tmp_path)
     cfg_path = tmp_path / "config" / "config.yaml"
     cfg = yaml.safe_load(cfg_path.read_text())
-    cfg["measured"]["data_dir"] = str(ROOT / cfg["measured"]["data_dir"])
-    if not Path(cfg["measured"]["data_dir"]).is_dir():
-        pytest.skip("the shared measured data are not here (calibrate's input is imported from them)")
+    cfg["measured"]["data_dir"] = str(measured_data_dir)
     cfg["databases"] = ["box_test"]
     cfg["study"].update(parameters="calibrated", cases_per_database=1)
     cfg_path.write_text(yaml.safe_dump(cfg))

@@ -25,7 +25,6 @@ from ..shipped import ROOT
 from .rounds import checkpointed_case, round_of_two, same_cases
 
 SCRIPT = ROOT / "tests" / "cluster" / "one_node_slurm.sh"
-DATA = ROOT / "../shared/data/measured"
 
 
 @pytest.fixture(scope="module")
@@ -97,10 +96,10 @@ def _edit(path, change):
     path.write_text(yaml.safe_dump(cfg))
 
 
-def _small_calibration(cfg):
+def _small_calibration(cfg, data_dir):
     """One 3 kg database, two 0.15 x 0.30 m specimens, mu alone: 3 sets x 2 cases x 6 cycles
     (the target's points at N = 1 and 5), quick first loadings (tests/biaxial_fast.py)."""
-    cfg["measured"]["data_dir"] = str(DATA)
+    cfg["measured"]["data_dir"] = str(data_dir)
     cfg["specimens"]["biaxial_small"]["cases"] = 2
     cfg["strength"]["cases"] = 2
     cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
@@ -109,10 +108,8 @@ def _small_calibration(cfg):
 
 
 @pytest.fixture(scope="module")
-def small_workflow(tmp_path_factory):
+def small_workflow(tmp_path_factory, measured_data_dir):
     """A workflow folder whose calibrate target is small, everything before it run."""
-    if not DATA.is_dir():
-        pytest.skip("the shared measured data are not here (calibrate's input is imported from them)")
     d = tmp_path_factory.mktemp("workflow")
     shutil.copy(ROOT / "Snakefile", d)
     for part in ("workflow", "profiles"):
@@ -123,7 +120,7 @@ def small_workflow(tmp_path_factory):
     dbs["databases"] = {"box_test": dbs["databases"]["box_test"]}
     (d / "config" / "databases.yaml").write_text(yaml.safe_dump(dbs))
     shutil.copy(ROOT / "config" / "config.yaml", d / "config")
-    _edit(d / "config" / "config.yaml", _small_calibration)
+    _edit(d / "config" / "config.yaml", lambda cfg: _small_calibration(cfg, measured_data_dir))
     _snakemake(d, "--cores", "2", "calibrate", "--omit-from", "calibrate")
     return d
 

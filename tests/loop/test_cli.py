@@ -170,36 +170,32 @@ def test_the_cuda_backend_is_refused_without_a_gpu(tmp_path):
     assert not out.exists()
 
 
-def _workflow(tmp_path, change, *options):
+def _workflow(tmp_path, data_dir, change, *options):
     for part in ("Snakefile", "workflow", "config"):
         src = ROOT / part
         (shutil.copytree(src, tmp_path / part) if src.is_dir() else shutil.copy(src, tmp_path))
     path = tmp_path / "config" / "config.yaml"
     cfg = yaml.safe_load(path.read_text())
-    cfg["measured"]["data_dir"] = str(ROOT / cfg["measured"]["data_dir"])
+    cfg["measured"]["data_dir"] = str(data_dir)
     change(cfg["loop"])
     path.write_text(yaml.safe_dump(cfg))
     return subprocess.run(["snakemake", "--cores", "1", "-n", "-p", "loop", *options], cwd=tmp_path,
                           capture_output=True, text=True)
 
 
-def test_snakefile_plans_the_loop(tmp_path):
-    if not (ROOT / "../shared/data/measured").is_dir():
-        pytest.skip("the shared measured data are not here (the loop's tests are imported from them)")
-    out = _workflow(tmp_path, lambda c: None)
+def test_snakefile_plans_the_loop(tmp_path, measured_data_dir):
+    out = _workflow(tmp_path, measured_data_dir, lambda c: None)
     assert out.returncode == 0, out.stderr
     assert "rule specimen_assemble:" in out.stdout and "ballaststudy loop results/measured/" in out.stdout
     assert "ballaststudy horizon results/measured/" in out.stdout and "--fit-cycles 1000 10000" in out.stdout
     assert "--horizon results/horizon/horizon.nc" in out.stdout
 
 
-def test_the_scale_config_plans_the_loop_on_full_size_specimens(tmp_path):
+def test_the_scale_config_plans_the_loop_on_full_size_specimens(tmp_path, measured_data_dir):
     """config/loop_scale.yaml (issue 34): config.yaml's loop to N = 2000 in real time on six
     0.30 x 0.60 m specimens, with the p = 30 kPa test the default leaves out; read alone (as
     the stages' command lines read it) it differs from config.yaml in those keys only."""
-    if not (ROOT / "../shared/data/measured").is_dir():
-        pytest.skip("the shared measured data are not here (the loop's tests are imported from them)")
-    out = _workflow(tmp_path, lambda c: None, "--configfile", "config/loop_scale.yaml")
+    out = _workflow(tmp_path, measured_data_dir, lambda c: None, "--configfile", "config/loop_scale.yaml")
     assert out.returncode == 0, out.stderr
     assert out.stdout.count("rule specimen_assemble:") == 6 and "results_loop_scale/specimens/biaxial_full/case5.nc" in out.stdout
     scale, default = load_config(ROOT / "config/loop_scale.yaml"), load_config(ROOT / "config/config.yaml")
@@ -218,7 +214,7 @@ def test_the_scale_config_plans_the_loop_on_full_size_specimens(tmp_path):
     (lambda c: c.update(targets=["sun_et_al_16/p60_q230_f5"]), "loop.targets"),
 ])
 def test_snakefile_refuses_bad_loop_config(tmp_path, change, message):
-    out = _workflow(tmp_path, change)
+    out = _workflow(tmp_path, tmp_path / "no_curves", change)     # refused before any curve is read
     lines = [ln for ln in out.stderr.strip().splitlines() if not ln.startswith("note: ")]
     assert out.returncode == 2 and len(lines) == 1, out.stderr
     assert message in lines[0], lines[0]

@@ -14,7 +14,6 @@ from ballaststudy.cli import main
 from ballaststudy.measured import measured_dataset
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared" / "data" / "measured"
 
 
 def write_test(d, axial="1, 0.01\n100, 0.03\n10, 0.02\n", vol="1, 0.5\n1000, -0.2\n",
@@ -107,14 +106,13 @@ def test_data_dir_lookup_and_cli(tmp_path):
     assert out.with_name("out.nc.prov.json").is_file()
 
 
-@pytest.mark.skipif(not SHARED.is_dir(), reason="shared measured data not on this machine")
-def test_every_shipped_test_imports():
+def test_every_shipped_test_imports(measured_data_dir):
     """Each YAML of config/measured imports with both strains on a sorted cycle axis (no
     values are checked: the data are not ours to restate)."""
     tests = sorted((ROOT / "config" / "measured").rglob("*.yaml"))
-    assert len(tests) == len(list(SHARED.rglob("axial*")))
+    assert len(tests) == len(list(measured_data_dir.rglob("axial*")))
     for path in tests:
-        ds = measured_dataset(path, SHARED)
+        ds = measured_dataset(path, measured_data_dir)
         assert set(ds.data_vars) == {"axial_strain", "volumetric_strain"}, path
         assert np.all(np.diff(ds["cycle"].values) > 0), path
         assert np.isfinite(ds["axial_strain"].values).sum() >= 3, path

@@ -1,8 +1,12 @@
 # Measured cyclic tests in: every conditions YAML under measured.tests_dir (one test each,
 # its curve files beside it or in measured.data_dir) -> results/measured/<test>.nc.
-# A user adds a test by dropping its YAML (+ curve files) into the folder.
+# A user adds a test by dropping its YAML (+ curve files) into the folder. The public curves
+# the shipped tests read are fetched into measured.data_dir (measured_fetch) when a target
+# needs them; `all` leaves the tests out until they are there, so it runs offline.
+import shlex
 from pathlib import Path
 
+from ballaststudy.measured.fetch import SOURCE_REPOSITORY, registered_files
 from ballaststudy.measured.importer import curve_files, load_conditions
 
 MEASURED_TESTS_DIR = Path(config["measured"]["tests_dir"])
@@ -14,10 +18,30 @@ for _test in MEASURED_TESTS:        # one line naming file and key before any jo
         load_conditions(MEASURED_TESTS_DIR / f"{_test}.yaml")
     except ConfigError as err:
         stop(err)
-MEASURED_AVAILABLE = MEASURED_DATA_DIR.is_dir() or not MEASURED_TESTS
+MEASURED_AVAILABLE = all(p.is_file() for t in MEASURED_TESTS
+                         for p in curve_files(MEASURED_TESTS_DIR / f"{t}.yaml", MEASURED_DATA_DIR))
 if not MEASURED_AVAILABLE:
-    print(f"note: measured.data_dir {MEASURED_DATA_DIR} not found: the {len(MEASURED_TESTS)} "
-          "measured tests are left out of 'all'", file=sys.stderr)
+    print(f"note: the measured curves are not in measured.data_dir {MEASURED_DATA_DIR}: "
+          f"`snakemake --cores 1 measured_fetch` fetches them from {SOURCE_REPOSITORY} "
+          f"(a target that reads them does too); until then 'all' leaves out the {len(MEASURED_TESTS)} "
+          "measured tests", file=sys.stderr)
+
+
+rule measured_fetch_files:
+    output:
+        [str(MEASURED_DATA_DIR / name) for name in registered_files()],
+    params:
+        data_dir=MEASURED_DATA_DIR,
+        url="" if config["measured"]["source_url"] is None else f"--url {shlex.quote(config['measured']['source_url'])}",
+    log:
+        f"{RESULTS}/logs/measured/fetch.log",
+    shell:
+        "ballaststudy measured fetch --data-dir {params.data_dir} {params.url} --quiet > {log} 2>&1"
+
+
+rule measured_fetch:
+    input:
+        rules.measured_fetch_files.output,
 
 
 def measured_inputs(wildcards):

@@ -1,11 +1,15 @@
-"""`ballaststudy measured import`: one measured cyclic test (conditions YAML + curve files)
-to one netCDF. Bad input raises ConfigError (file[:line], key, what is allowed), printed as
-one line with exit code 2; nothing is written then."""
+"""`ballaststudy measured fetch`: the public curves from their source; `ballaststudy measured
+import`: one measured cyclic test (conditions YAML + curve files) to one netCDF. Bad input
+raises ConfigError (file[:line], key, what is allowed), printed as one line with exit code
+2; nothing is written then."""
 from pathlib import Path
+
+import pooch
 
 from ..inputs import input_dir, input_file, writable_file
 from ..provenance import Recorder
 from .compare import write_comparison
+from .fetch import SOURCE_COMMIT, SOURCE_REPOSITORY, SOURCE_URL, fetch
 from .importer import curve_files, measured_dataset, write_test
 
 
@@ -24,6 +28,13 @@ def _import(args):
         print(f"wrote {args.out}: {', '.join(ds.data_vars)} at {ds.sizes['cycle']} cycles")
 
 
+def _fetch(args):
+    pooch.get_logger().setLevel("WARNING" if args.quiet else "INFO")
+    paths = fetch(args.data_dir, args.url)
+    if not args.quiet:
+        print(f"{len(paths)} curve files in {args.data_dir}, checked against their SHA-256")
+
+
 def _compare(args):
     out = writable_file(args.out)
     figure = None if args.no_figure else writable_file(out.with_suffix(".png"))
@@ -40,6 +51,13 @@ def register(subparsers):
     """Add the ``measured`` stage."""
     m = subparsers.add_parser("measured", help="measured cyclic tests in (curves + conditions)")
     ms = m.add_subparsers(dest="action", required=True)
+    f = ms.add_parser("fetch", help="the public measured curves from their source, each checked by its hash")
+    f.add_argument("--data-dir", required=True, type=Path, help="folder to put them in (measured.data_dir)")
+    f.add_argument("--url", default=SOURCE_URL,
+                   help=f"where the source's experimental_data/ folder is (default: {SOURCE_REPOSITORY} "
+                        f"at commit {SOURCE_COMMIT[:7]}; a mirror of it)")
+    f.add_argument("--quiet", action="store_true", help="no progress")
+    f.set_defaults(func=_fetch)
     i = ms.add_parser("import", help="one test's curves and conditions -> netCDF")
     i.add_argument("conditions", metavar="TEST.yaml", type=Path,
                    help="the test's conditions and curve files (schemas/measured.schema.yaml)")
