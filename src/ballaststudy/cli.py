@@ -30,7 +30,7 @@ from .measured.cli import register as register_measured
 from .measured.importer import load_conditions
 from .scenario.cli import register as register_case
 from .study.cli import register as register_study
-from .argtypes import SEED, integer
+from .argtypes import SEED, add_config, add_quiet, integer
 
 
 def _forms_generate(args):
@@ -141,21 +141,21 @@ def build_parser():
     forms = sub.add_parser("forms", help="ballast random form generator (thesis ch. 3)")
     fs = forms.add_subparsers(dest="action", required=True)
     g = fs.add_parser("generate", help="generate form databases")
-    g.add_argument("names", nargs="*", metavar="DATABASE")
+    g.add_argument("names", nargs="*", metavar="DATABASE", help="databases to generate (names in config/databases.yaml)")
     g.add_argument("--all", action="store_true", help="every database the config selects")
     g.add_argument("--out", required=True, type=Path, help="output folder")
-    g.add_argument("--config", default="config/config.yaml", type=Path)
-    g.add_argument("--quiet", action="store_true")
+    add_config(g)
+    add_quiet(g)
     g.set_defaults(func=_forms_generate)
 
     v = fs.add_parser("validate", help="objective vs generated parameters")
-    v.add_argument("files", nargs="+", metavar="FILE.nc")
+    v.add_argument("files", nargs="+", metavar="FILE.nc", help="form databases (forms generate)")
     v.add_argument("--json", action="store_true", help="print a JSON list, one object per database")
     v.add_argument("--csv", type=Path, help="also write the full table as CSV")
     v.set_defaults(func=_forms_validate)
 
     e = fs.add_parser("evaluate", help="a, b, c, volume, group and flags of one STL stone")
-    e.add_argument("stl", metavar="STONE.stl")
+    e.add_argument("stl", metavar="STONE.stl", help="a closed triangle mesh of one stone")
     # --density and --units are checked by evaluate_stl, for a one-line error like every other
     e.add_argument("--density", metavar="KG_M3", help="give the mass too (kg/m3, finite and > 0)")
     e.add_argument("--units", default="mm", metavar="mm|m",
@@ -163,8 +163,8 @@ def build_parser():
     e.set_defaults(func=_forms_evaluate)
 
     r = fs.add_parser("report", help="figures like thesis Figs. 3-9 ... 3-16")
-    r.add_argument("files", nargs="+", metavar="FILE.nc")
-    r.add_argument("--out", required=True, type=Path)
+    r.add_argument("files", nargs="+", metavar="FILE.nc", help="form databases (forms generate)")
+    r.add_argument("--out", required=True, type=Path, help="folder for the report's figures and tables")
     r.add_argument("--stones", type=integer(1, 25), default=9, help="random stones per database (Fig. 3-9)")
     r.add_argument("--seed", type=SEED, default=0, help="which random stones are shown")
     r.set_defaults(func=_forms_report)
@@ -172,11 +172,11 @@ def build_parser():
     pv = sub.add_parser("provenance", help="what made an output, and is it still current")
     ps = pv.add_subparsers(dest="action", required=True)
     sh = ps.add_parser("show", help="lineage of one output back to the config")
-    sh.add_argument("file")
-    sh.add_argument("--results", default="results")
+    sh.add_argument("file", help="an output file of the workflow")
+    sh.add_argument("--results", default="results", help="the results folder whose provenance/ holds the records")
     sh.set_defaults(func=_provenance_show)
     vf = ps.add_parser("verify", help="re-hash every recorded input and output; exit 1 if any changed")
-    vf.add_argument("--results", default="results")
+    vf.add_argument("--results", default="results", help="the results folder whose provenance/ holds the records")
     vf.set_defaults(func=_provenance_verify)
 
     register_bpm(sub)
@@ -190,7 +190,7 @@ def build_parser():
     c = sub.add_parser("config", help="configuration")
     cs = c.add_subparsers(dest="action", required=True)
     ck = cs.add_parser("check", help="validate the config and database definitions")
-    ck.add_argument("--config", default="config/config.yaml", type=Path)
+    add_config(ck)
     ck.set_defaults(func=_config_check)
     return p
 

@@ -7,7 +7,7 @@ from tqdm import tqdm
 
 from ..config import ConfigError, job_seed, load_config
 from ..inputs import writable_file
-from ..argtypes import SEED, integer
+from ..argtypes import SEED, add_config, add_quiet, integer
 from .library import build_library, open_forms
 from .params import BpmParams
 
@@ -49,12 +49,12 @@ def register(subparsers):
     bpm = subparsers.add_parser("bpm", help="bonded particle models of the 2D forms (thesis 4.2.1)")
     bs = bpm.add_subparsers(dest="action", required=True)
     b = bs.add_parser("build", help="build the BPM library of one form database")
-    b.add_argument("forms", type=Path, metavar="FORMS.nc")
-    b.add_argument("--out", required=True, type=Path, metavar="BPM.nc")
-    b.add_argument("--config", default="config/config.yaml", type=Path)
+    b.add_argument("forms", type=Path, metavar="FORMS.nc", help="a form database (forms generate)")
+    b.add_argument("--out", required=True, type=Path, metavar="BPM.nc", help="the bonded-particle library to write")
+    add_config(b)
     b.add_argument("--max-stones", type=integer(1, 10_000_000), metavar="N",
                    help="override bpm.max_stones (0 = every stone)")
     b.add_argument("--seed", type=SEED, help="override the seed derived from the study seed")
-    b.add_argument("--quiet", action="store_true")
+    add_quiet(b)
     b.set_defaults(func=_bpm_build)
     return bpm

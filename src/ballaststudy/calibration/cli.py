@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ..argtypes import integer
+from ..argtypes import add_config, add_quiet, integer
 from ..atomic import atomic_path
 from ..config import ConfigError, load_config
 from ..inputs import input_file, open_netcdf, writable_dir, writable_file
@@ -326,12 +326,12 @@ def register(subparsers):
     ps = p.add_subparsers(dest="action", required=True)
     s = ps.add_parser("setting", help="a calibrated.yaml of the varied parameter(s)")
     s.add_argument("pairs", nargs="+", metavar="NAME VALUE", help="F_str_co and/or mu, each with its value")
-    s.add_argument("--out", required=True, type=Path)
+    s.add_argument("--out", required=True, type=Path, help="the calibrated.yaml to write")
     s.set_defaults(func=_setting)
     r = ps.add_parser("report", help="slopes, sensitivity, the thesis' findings, figures")
     r.add_argument("cases", nargs="+", type=Path, help="metrics.nc of the parametric runs")
-    r.add_argument("--out-dir", required=True, type=Path)
-    r.add_argument("--quiet", action="store_true")
+    r.add_argument("--out-dir", required=True, type=Path, help="folder for the report, its table and figures")
+    add_quiet(r)
     r.set_defaults(func=_parametric_report)
     c = subparsers.add_parser("calibrate", help="fit the config's parameters to a measured test (thesis 4.3)")
     target_arguments(c, "K assembled specimens (case assemble; biaxial for triaxial tests, box for box tests)")
@@ -345,7 +345,7 @@ def target_arguments(c, specimens_help):
     c.add_argument("--conditions", required=True, nargs="+", type=Path,
                    help="their conditions YAMLs, in the same order")
     c.add_argument("--specimens", required=True, nargs="+", type=Path, help=specimens_help)
-    c.add_argument("--out-dir", required=True, type=Path)
+    c.add_argument("--out-dir", required=True, type=Path, help="folder for the run's cases, netCDF, report and figures")
     c.add_argument("--jobs", type=integer(1, 1024), default=1, help="cases run in parallel (executor local)")
     c.add_argument("--backend", choices=BACKENDS, default="cpu",
                    help="cpu: in the executor's pool; cuda: every case in one GPU batch")
@@ -356,5 +356,5 @@ def target_arguments(c, specimens_help):
                    "config's executor.scheduler_address)")
     c.add_argument("--strength-envelope", type=Path, help="the specimens' strength envelope "
                    "(case envelope), for the config's stress_mapping strength_ratio")
-    c.add_argument("--config", default="config/config.yaml", type=Path)
-    c.add_argument("--quiet", action="store_true")
+    add_config(c)
+    add_quiet(c)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
-from ..argtypes import number
+from ..argtypes import add_quiet, number
 from ..inputs import writable_dir
 from ..measured.importer import measured_test_name
 from ..metrics.output import display_scale
@@ -118,10 +118,11 @@ def register(subparsers):
     c = subparsers.add_parser("horizon", help="each accumulation law's extrapolation error on measured "
                               "curves; the law the loop's long-term horizon uses")
     c.add_argument("measured", nargs="+", type=Path, help="measured tests' netCDF (measured import)")
-    c.add_argument("--out-dir", type=Path, required=True)
+    c.add_argument("--out-dir", type=Path, required=True, help="folder for horizon.nc, horizon.md and horizon.png")
     c.add_argument("--fit-cycles", type=number(1, 1e7), nargs="+", default=[1000.0, 10000.0],
                    help="N_fit: each law sees the points up to this load cycle")
-    c.add_argument("--quantity", choices=["axial_strain", "volumetric_strain"], default="axial_strain")
-    c.add_argument("--quiet", action="store_true")
+    c.add_argument("--quantity", choices=["axial_strain", "volumetric_strain"], default="axial_strain",
+                   help="the measured curve the laws are fitted to")
+    add_quiet(c)
     c.set_defaults(func=_horizon)
     return c

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pooch
 
+from ..argtypes import add_quiet
 from ..inputs import input_dir, input_file, writable_file
 from ..provenance import Recorder
 from .compare import write_comparison
@@ -56,7 +57,7 @@ def register(subparsers):
     f.add_argument("--url", default=SOURCE_URL,
                    help=f"where the source's experimental_data/ folder is (default: {SOURCE_REPOSITORY} "
                         f"at commit {SOURCE_COMMIT[:7]}; a mirror of it)")
-    f.add_argument("--quiet", action="store_true", help="no progress")
+    add_quiet(f)
     f.set_defaults(func=_fetch)
     i = ms.add_parser("import", help="one test's curves and conditions -> netCDF")
     i.add_argument("conditions", metavar="TEST.yaml", type=Path,
@@ -64,13 +65,13 @@ def register(subparsers):
     i.add_argument("--out", required=True, type=Path, help="netCDF to write")
     i.add_argument("--data-dir", type=Path,
                    help="folder to look up curve files not found beside the YAML")
-    i.add_argument("--quiet", action="store_true")
+    add_quiet(i)
     i.set_defaults(func=_import)
     c = ms.add_parser("compare", help="a measured test beside its simulated cases -> netCDF + PNG")
     c.add_argument("measured", type=Path, help="the test's netCDF (measured import)")
     c.add_argument("cases", nargs="+", type=Path, help="metrics.nc of its biaxial cases")
-    c.add_argument("--out", required=True, type=Path)
-    c.add_argument("--no-figure", action="store_true")
-    c.add_argument("--quiet", action="store_true")
+    c.add_argument("--out", required=True, type=Path, help="the comparison's netCDF (its figure beside it, .png)")
+    c.add_argument("--no-figure", action="store_true", help="write no figure")
+    add_quiet(c)
     c.set_defaults(func=_compare)
     return m

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..argtypes import SEED, integer, number
+from ..argtypes import SEED, add_config, add_quiet, integer, number
 from ..atomic import atomic_path
 from ..config import ConfigError, load_config
 from ..inputs import open_netcdf, writable_dir, writable_file
@@ -237,7 +237,7 @@ def register(subparsers):
     cs = c.add_subparsers(dest="action", required=True)
 
     a = cs.add_parser("assemble", help="drop, tamp and relax stones from a BPM library")
-    a.add_argument("library", metavar="BPM.nc", type=Path)
+    a.add_argument("library", metavar="BPM.nc", type=Path, help="the stones' bonded-particle library (bpm build)")
     a.add_argument("--case", type=integer(0, 1_000_000), required=True, help="case number (selects the seed)")
     a.add_argument("--out", required=True, type=Path, help="assembled state (.nc)")
     a.add_argument("--seed", type=SEED, help="override the seed derived from (study seed, database, case)")
@@ -246,13 +246,13 @@ def register(subparsers):
     a.add_argument("--height-m", dest="height_m", type=number(0.01, 100), help="biaxial: specimen height (config's)")
     a.add_argument("--membrane-segments", dest="membrane_segments", type=integer(1, 40),
                    help="biaxial: 1 rigid side walls, n > 1 a membrane of n segments a side (config's)")
-    a.add_argument("--config", default="config/config.yaml", type=Path)
-    a.add_argument("--quiet", action="store_true")
+    add_config(a)
+    add_quiet(a)
     a.set_defaults(func=_case_assemble)
 
 
     r = cs.add_parser("run", help="static pre-loading, cyclic loading, metrics.nc")
-    r.add_argument("assembled", metavar="ASSEMBLED.nc", type=Path)
+    r.add_argument("assembled", metavar="ASSEMBLED.nc", type=Path, help="an assembled specimen (case assemble)")
     r.add_argument("--cycles", type=integer(1, 10_000_000), required=True, help="loading cycles (thesis 1000)")
     r.add_argument("--out", required=True, type=Path, help="metrics file (.nc)")
     r.add_argument("--checkpoint-every", type=integer(1, 10_000_000), help="cycles between checkpoints (config default)")
@@ -273,22 +273,23 @@ def register(subparsers):
     r.add_argument("--effect", action="append", metavar="NAME:PARAMETER=VALUE,...", help="add an "
                    "effect (scenario.modifiers) with its parameters, e.g. fatigue:fatigue_exponent=10,"
                    "endurance_ratio=0.3 (repeatable; give the same again to resume a run)")
-    r.add_argument("--config", default="config/config.yaml", type=Path)
-    r.add_argument("--quiet", action="store_true")
+    add_config(r)
+    add_quiet(r)
     r.set_defaults(func=_case_run)
 
     t = cs.add_parser("strength", help="biaxial: monotonic compression through the peak at p")
-    t.add_argument("assembled", metavar="ASSEMBLED.nc", type=Path)
-    t.add_argument("--confining-pressure-kPa", dest="p_kPa", type=number(0.001, 1e6), required=True)
+    t.add_argument("assembled", metavar="ASSEMBLED.nc", type=Path, help="an assembled biaxial specimen (case assemble)")
+    t.add_argument("--confining-pressure-kPa", dest="p_kPa", type=number(0.001, 1e6), required=True,
+                   help="the confining pressure p held while the specimen is compressed [kPa]")
     t.add_argument("--case", type=integer(0, 1_000_000), default=0, help="the specimen's case number (recorded)")
     t.add_argument("--out", required=True, type=Path, help="strength test (.nc)")
-    t.add_argument("--config", default="config/config.yaml", type=Path)
-    t.add_argument("--quiet", action="store_true")
+    add_config(t)
+    add_quiet(t)
     t.set_defaults(func=_case_strength)
 
     e = cs.add_parser("envelope", help="strength envelope of strength tests (case strength)")
-    e.add_argument("tests", metavar="STRENGTH.nc", type=Path, nargs="+")
+    e.add_argument("tests", metavar="STRENGTH.nc", type=Path, nargs="+", help="strength tests (case strength) at several p")
     e.add_argument("--out", required=True, type=Path, help="envelope (.nc)")
-    e.add_argument("--quiet", action="store_true")
+    add_quiet(e)
     e.set_defaults(func=_case_envelope)
     return c

@@ -101,7 +101,7 @@ def _study_merge(args):
 def _analysis_parser(actions, name, help_text):
     """An action reading STUDY.nc into an output folder with seeded bootstrap intervals."""
     p = actions.add_parser(name, help=help_text)
-    p.add_argument("study", type=Path, metavar="STUDY.nc")
+    p.add_argument("study", type=Path, metavar="STUDY.nc", help="the aggregated study (study aggregate)")
     p.add_argument("--out", required=True, type=Path, help="output folder")
     p.add_argument("--resamples", type=integer(100, 100_000), default=2000, help="bootstrap resamples (>= 100)")
     p.add_argument("--seed", type=SEED, default=0, help="bootstrap seed")
