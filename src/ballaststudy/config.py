@@ -44,7 +44,7 @@ def _section(cfg, dotted):
     return cfg
 
 
-def _default(section, key):
+def stage_default(section, key):
     """The value a stage uses for a key the config leaves out (its params class' default)."""
     if section == "bpm":        # the schema gives the bpm section's defaults (= BpmParams')
         return load_schema("config")["properties"]["bpm"]["properties"][key].get("default")
@@ -57,7 +57,7 @@ def check_domain(cfg, file):
     defaults included); ConfigError naming key and range."""
     for section, lo_key, hi_key, strict in ORDERED_PAIRS:
         sec = _section(cfg, section)
-        lo, hi = (sec.get(k, _default(section, k)) for k in (lo_key, hi_key))
+        lo, hi = (sec.get(k, stage_default(section, k)) for k in (lo_key, hi_key))
         if lo is not None and hi is not None and not (lo < hi if strict else lo <= hi):
             relation = "below" if strict else "at most"
             raise ConfigError(file, f"{section}.{lo_key}",

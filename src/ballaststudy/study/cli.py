@@ -124,7 +124,7 @@ def register(subparsers):
     a.set_defaults(func=_study_aggregate)
 
     i = _analysis_parser(ss, "iri", "IRI tables like thesis Table 5-2: CSV, Markdown, heatmap")
-    i.add_argument("--min-rho", type=number(0.0, 1.0), default=0.3, help="smallest |Spearman rho| for a verdict other than none")
+    i.add_argument("--min-rho", type=number(0.0, 1.0), default=0.3, help="smallest absolute Spearman rho for a verdict other than none")
     i.set_defaults(func=_study_iri)
 
     o = _analysis_parser(ss, "optimise", "ranking, Pareto set, recommendation, thesis findings, Figs. 5-1 ... 5-6")

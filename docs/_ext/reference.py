@@ -1,0 +1,88 @@
+"""Sphinx extension: the reference pages written from the code at every build, one source
+each, so they cannot drift from it: the config keys from the config schema (the rig keys'
+defaults from the rigs' parameter classes, which the stages use), the loop's effects and
+the calibration's material parameters from the modifiers' registry. Written into
+reference/generated/ (not kept in git) before Sphinx reads the sources."""
+from pathlib import Path
+
+from ballaststudy.config import stage_default
+from ballaststudy.scenario.modifiers import MODIFIERS
+from ballaststudy.schema import allowed, load_schema
+
+GENERATED = Path(__file__).resolve().parents[1] / "reference" / "generated"
+STAGE_SECTIONS = ("rig.box", "rig.biaxial")     # their defaults: the rigs' parameter classes
+
+
+def _cell(text):
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _is_leaf(node):
+    return "properties" not in node
+
+
+def config_sections(schema, path=""):
+    """[(dotted section, its description, [(key, leaf schema)])] depth first."""
+    leaves, below = [], []
+    for key, node in schema.get("properties", {}).items():
+        dotted = f"{path}{key}"
+        if _is_leaf(node):
+            leaves.append((key, node))
+        else:
+            below += config_sections(node, dotted + ".")
+    here = [(path.rstrip("."), schema.get("description", ""), leaves)] if leaves else []
+    return here + below
+
+
+def _default(section, key, node):
+    if "default" in node or not section.startswith(STAGE_SECTIONS):
+        value = node.get("default", "")
+    else:
+        value = stage_default(section, key)
+    return "" if value == "" else f"`{value!r}`" if not isinstance(value, str) else f"`{value}`"
+
+
+def config_page():
+    lines = ["# Configuration keys", "",
+             "Every key of `config/config.yaml`, from the schema that validates it "
+             "(`src/ballaststudy/schemas/config.schema.yaml`). A key left out takes its default. "
+             "Units are SI unless the key's name carries one (`_mm`, `_kPa`, `_kN`, ...); "
+             "the description ends with it.", ""]
+    for section, description, leaves in config_sections(load_schema("config")):
+        lines += [f"## `{section or 'top level'}`", "", _cell(description), "",
+                  "| key | default | allowed | description |", "|---|---|---|---|"]
+        lines += [f"| `{key}` | {_cell(_default(section, key, node))} | {_cell(allowed(node))} | "
+                  f"{_cell(node.get('description', ''))} |" for key, node in leaves]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def modifiers_page():
+    lines = ["# Effects and material parameters", "",
+             "The registry of modifiers (`ballaststudy.scenario.modifiers`): the material "
+             "parameters a calibration varies and the effects the loop chooses among.", ""]
+    for role, title in (("material", "Material parameters"), ("effect", "Effects")):
+        lines += [f"## {title}", ""]
+        for name, m in MODIFIERS.items():
+            if m.role != role:
+                continue
+            lines += [f"### `{name}`", "", _cell(m.mechanism), "",
+                      "| parameter | long name | units | low | high |", "|---|---|---|---|---|"]
+            lines += [f"| `{p.name}` | {_cell(p.long_name)} | {_cell(p.units)} | {p.low:g} | {p.high:g} |"
+                      for p in m.parameters]
+            lines.append("")
+    return "\n".join(lines)
+
+
+def write_pages(app=None):
+    """Write the generated pages (only those whose text changed, so Sphinx rebuilds no more)."""
+    GENERATED.mkdir(parents=True, exist_ok=True)
+    for name, text in (("config.md", config_page()), ("modifiers.md", modifiers_page())):
+        path = GENERATED / name
+        if not path.is_file() or path.read_text() != text:
+            path.write_text(text)
+
+
+def setup(app):
+    app.connect("builder-inited", write_pages)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
