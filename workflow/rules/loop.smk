@@ -1,4 +1,4 @@
-# Closing the loop with measured data (issue 14): the plain model and every candidate effect
+# Closing the loop with measured data: the plain model and every candidate effect
 # (loop.effects) run under each target test, effects judged on held-out tests ->
 # results/loop/ (report.md, loop.nc, chosen.yaml, curves.png). `snakemake --cores 2 loop`;
 # not part of `all`. Cases are cached by parameter hash under cases/: an interrupted loop resumes.
@@ -14,7 +14,7 @@ LOOP_CALIBRATED = LOOP["parameters"] == "calibrated"
 HORIZON_TESTS = [t for t in MEASURED_TESTS if load_conditions(MEASURED_TESTS_DIR / f"{t}.yaml")["rig"] != "box"]
 
 
-# `snakemake --cores 2 horizon` (issue 34): each accumulation law fitted to every measured
+# `snakemake --cores 2 horizon`: each accumulation law fitted to every measured
 # curve up to loop.horizon_fit_cycles and read at its last point -> results/horizon/
 # (horizon.md, horizon.nc, horizon.png); the loop extrapolates with the law chosen there.
 rule horizon:
