@@ -1,11 +1,14 @@
 """Sphinx extension: the reference pages written from the code at every build, one source
 each, so they cannot drift from it: the config keys from the config schema (the rig keys'
 defaults from the rigs' parameter classes, which the stages use), the loop's effects and
-the calibration's material parameters from the modifiers' registry. Written into
-reference/generated/ (not kept in git) before Sphinx reads the sources."""
+the calibration's material parameters from the modifiers' registry, the contact
+sub-models from theirs, a case's per-cycle variables from the metrics writer's table.
+Written into reference/generated/ (not kept in git) before Sphinx reads the sources."""
 from pathlib import Path
 
 from ballaststudy.config import stage_default
+from ballaststudy.dem.law import KINDS, SUBMODELS
+from ballaststudy.metrics.output import VARIABLES
 from ballaststudy.scenario.modifiers import MODIFIERS
 from ballaststudy.schema import allowed, load_schema
 
@@ -74,10 +77,37 @@ def modifiers_page():
     return "\n".join(lines)
 
 
+def submodels_page():
+    lines = ["# Contact sub-models", "",
+             "A contact law is one sub-model per kind (normal, damping, tangential, rolling), "
+             "registered in `ballaststudy.dem.law`; their coefficients are columns of the "
+             "per-material-pair table ([contact laws](../../explanation/contact-laws.md)).", ""]
+    for kind in KINDS:
+        lines += [f"## {kind}", "", "| sub-model | coefficients | history columns | state | law |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| `{sm.name}` | {', '.join(f'`{c}`' for c in sm.coefficients) or '-'} | {sm.history} | "
+                  f"{', '.join(sm.state) or '-'} | {_cell(sm.doc)} |"
+                  for (k, _), sm in SUBMODELS.items() if k == kind]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def metrics_page():
+    lines = ["# A case's per-cycle variables", "",
+             "`metrics.nc` of every case: one row per load cycle (dimension `cycle`), each "
+             "variable with these `units` and `long_name` attributes (`study.nc` holds the "
+             "behaviours the study reads, over database x case x cycle).", "",
+             "| variable | units | long_name |", "|---|---|---|"]
+    lines += [f"| `{name}` | {_cell(units)} | {_cell(long_name)} |" for name, (units, long_name, _) in VARIABLES.items()]
+    return "\n".join(lines) + "\n"
+
+
 def write_pages(app=None):
     """Write the generated pages (only those whose text changed, so Sphinx rebuilds no more)."""
     GENERATED.mkdir(parents=True, exist_ok=True)
-    for name, text in (("config.md", config_page()), ("modifiers.md", modifiers_page())):
+    pages = {"config.md": config_page(), "modifiers.md": modifiers_page(), "submodels.md": submodels_page(),
+             "metrics.md": metrics_page()}
+    for name, text in pages.items():
         path = GENERATED / name
         if not path.is_file() or path.read_text() != text:
             path.write_text(text)
