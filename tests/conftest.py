@@ -9,8 +9,8 @@ machine with a GPU, BALLASTSTUDY_TEST_GPU=real runs the same tests on it instead
 xdist runs one worker per core, so BLAS and OpenMP threads within a worker only contend
 for the cores: they are one per worker (set before numpy loads, inherited by the workers
 and by the programs tests start). With OpenBLAS's default two per worker, the loop's
-Gaussian-process fits ran 4-5 x slower while the other core was busy (bench/blas_threads.py:
-17.6 and 15.8 s against 3.7 and 3.1 s, 2026-11-29)."""
+Gaussian-process fits ran 4-5 x slower while the other core was busy (17.6 and 15.8 s
+against 3.7 and 3.1 s: docs/how-to/cluster.md, "Threads")."""
 import copy
 import os
 

@@ -124,3 +124,9 @@ def test_every_config_key_the_guide_names_exists():
              and span.rsplit(".", 1)[1] not in FILE_SUFFIXES]
     wrong = [(str(page), key) for page, key in named if not _in_schema(schema, key.split("."))]
     assert len(named) > 10 and not wrong, wrong
+
+
+def test_every_bench_script_is_in_the_benchmarks_page():
+    page = (ROOT / "docs" / "reference" / "benchmarks.md").read_text()
+    missing = [p.name for p in sorted((ROOT / "bench").iterdir()) if p.is_file() and f"bench/{p.name}" not in page]
+    assert not missing, missing
