@@ -74,6 +74,7 @@ include: "workflow/rules/study.smk"
 
 
 rule all:
+    """The default job: forms and their report, every box case of every database, the study (IRI, ranking, optimised gradation), and the measured tests' import where their curves are there."""
     input:
         rules.forms_report.output,
         rules.study_iri.output,

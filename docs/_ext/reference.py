@@ -2,8 +2,10 @@
 each, so they cannot drift from it: the config keys from the config schema (the rig keys'
 defaults from the rigs' parameter classes, which the stages use), the loop's effects and
 the calibration's material parameters from the modifiers' registry, the contact
-sub-models from theirs, a case's per-cycle variables from the metrics writer's table.
+sub-models from theirs, a case's per-cycle variables from the metrics writer's table, the
+Snakemake targets from the rules' docstrings.
 Written into reference/generated/ (not kept in git) before Sphinx reads the sources."""
+import re
 from pathlib import Path
 
 from ballaststudy.config import stage_default
@@ -102,11 +104,31 @@ def metrics_page():
     return "\n".join(lines) + "\n"
 
 
+WORKFLOW = Path(__file__).resolve().parents[2]
+
+
+def workflow_rules():
+    """[(rule, file, its docstring)] in the order the Snakefile and workflow/rules/*.smk
+    define them (`snakemake --list-rules` prints the same docstrings)."""
+    files = [WORKFLOW / "Snakefile", *sorted((WORKFLOW / "workflow" / "rules").glob("*.smk"))]
+    return [(m.group(1), path.relative_to(WORKFLOW).as_posix(), " ".join(m.group(2).split()))
+            for path in files for m in re.finditer(r'(?m)^rule (\w+):\n\s+"""(.*?)"""', path.read_text(), re.S)]
+
+
+def rules_page():
+    lines = ["# Snakemake targets", "",
+             "Every rule of the workflow, by its docstring (`snakemake --list-rules` prints the "
+             "same): name one to run it and what it needs, `snakemake --cores 2 <rule>`; `all` "
+             "is the default job.", "", "| rule | defined in | what it makes |", "|---|---|---|"]
+    lines += [f"| `{name}` | `{path}` | {_cell(doc)} |" for name, path, doc in workflow_rules()]
+    return "\n".join(lines) + "\n"
+
+
 def write_pages(app=None):
     """Write the generated pages (only those whose text changed, so Sphinx rebuilds no more)."""
     GENERATED.mkdir(parents=True, exist_ok=True)
     pages = {"config.md": config_page(), "modifiers.md": modifiers_page(), "submodels.md": submodels_page(),
-             "metrics.md": metrics_page()}
+             "metrics.md": metrics_page(), "rules.md": rules_page()}
     for name, text in pages.items():
         path = GENERATED / name
         if not path.is_file() or path.read_text() != text:

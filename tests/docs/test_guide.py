@@ -15,7 +15,7 @@ def test_the_guide_builds_without_warnings(tmp_path):
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-4000:]
     for page in ("index", "reference/cli", "reference/generated/config", "reference/generated/modifiers",
-                 "reference/generated/submodels", "reference/generated/metrics"):
+                 "reference/generated/submodels", "reference/generated/metrics", "reference/generated/rules"):
         assert (tmp_path / "html" / f"{page}.html").is_file(), page
 
 
@@ -130,3 +130,11 @@ def test_every_bench_script_is_in_the_benchmarks_page():
     page = (ROOT / "docs" / "reference" / "benchmarks.md").read_text()
     missing = [p.name for p in sorted((ROOT / "bench").iterdir()) if p.is_file() and f"bench/{p.name}" not in page]
     assert not missing, missing
+
+
+def test_every_rule_has_a_docstring():
+    """The targets page and `snakemake --list-rules` read them."""
+    for smk in [ROOT / "Snakefile", *(ROOT / "workflow" / "rules").glob("*.smk")]:
+        text = smk.read_text()
+        bare = re.findall(r'(?m)^rule (\w+):\n(?!\s+""")', text)
+        assert not bare, (smk.name, bare)

@@ -1,6 +1,7 @@
 # Stage 2: bonded particle models of the 2D forms (thesis 4.2.1), one library per database.
 
 rule bpm_build:
+    """One form database's stones as bonded-particle stones (balls glued by flat joints): results/bpm/<database>.nc."""
     input:
         f"{RESULTS}/forms/{{db}}.nc",
     output:
@@ -17,5 +18,6 @@ rule bpm_build:
 
 
 rule bpm_all:
+    """Every selected database's bonded-particle stones."""
     input:
         expand(f"{RESULTS}/bpm/{{db}}.nc", db=NAMES),

@@ -15,6 +15,7 @@ except ConfigError as err:
 
 
 rule calibrate:
+    """The calibration's parameters fitted to the measured tests calibration.targets (Gaussian-process surrogate, multivariate t likelihood, sequential design): results/calibration/<name>/."""
     input:
         measured=[f"{RESULTS}/measured/{t}.nc" for t in CAL_TARGETS],
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in CAL_TARGETS],

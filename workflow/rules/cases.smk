@@ -10,6 +10,7 @@ CASES = list(range(int(config.get("study", {}).get("cases_per_database", 10))))
 
 
 rule case_assemble:
+    """One box-test case assembled: stones dropped, tamped and relaxed in the container (thesis 4.2.2)."""
     input:
         bpm=f"{RESULTS}/bpm/{{db}}.nc",
     output:
@@ -28,6 +29,7 @@ CALIBRATED = config["study"]["parameters"] == "calibrated"   # else Table 4.2's
 
 
 rule case_run:
+    """One box-test case loaded: static pre-loads, then rig.box.loading.cycles load cycles; its per-cycle metrics.nc (thesis 4.2.3, 4.5)."""
     input:
         assembled=f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
         parameters=[f"{CAL_OUT}/calibrated.yaml"] if CALIBRATED else [],
@@ -51,5 +53,6 @@ rule case_run:
 
 
 rule cases_all:
+    """Every box-test case of every selected database, assembled and loaded."""
     input:
         expand(f"{RESULTS}/cases/{{db}}/case{{case}}/metrics.nc", db=NAMES, case=CASES),

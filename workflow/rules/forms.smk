@@ -1,6 +1,7 @@
 # Stage 1: the ballast random form generator (thesis ch. 3), one job per database.
 
 rule forms_generate:
+    """One form database: random EN 13450 stones to its grading and shape indices, with their STL files."""
     output:
         nc=f"{RESULTS}/forms/{{db}}.nc",
         stl=f"{RESULTS}/forms/{{db}}.stl.zip",
@@ -18,6 +19,7 @@ rule forms_generate:
 
 
 rule forms_report:
+    """The form databases' validation table (objective against generated grading and indices) and figures like thesis Figs. 3-9 to 3-16."""
     input:
         expand(f"{RESULTS}/forms/{{db}}.nc", db=NAMES),
     output:

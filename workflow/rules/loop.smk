@@ -18,6 +18,7 @@ HORIZON_TESTS = [t for t in MEASURED_TESTS if load_conditions(MEASURED_TESTS_DIR
 # curve up to loop.horizon_fit_cycles and read at its last point -> results/horizon/
 # (horizon.md, horizon.nc, horizon.png); the loop extrapolates with the law chosen there.
 rule horizon:
+    """Each accumulation law fitted to every measured curve up to loop.horizon_fit_cycles and read at its last point; the law the loop extrapolates with: results/horizon/."""
     input:
         [f"{RESULTS}/measured/{t}.nc" for t in HORIZON_TESTS],
     output:
@@ -35,6 +36,7 @@ rule horizon:
 
 
 rule loop:
+    """The model against the measured tests loop.targets: the plain model and every candidate effect, each judged on tests left out, with the discrepancy per source and the verdict: results/loop/."""
     input:
         measured=[f"{RESULTS}/measured/{t}.nc" for t in LOOP["targets"]],
         conditions=[str(MEASURED_TESTS_DIR / f"{t}.yaml") for t in LOOP["targets"]],

@@ -28,6 +28,7 @@ if not MEASURED_AVAILABLE:
 
 
 rule measured_fetch_files:
+    """The public measured curves downloaded into measured.data_dir, each checked by its SHA-256."""
     output:
         [str(MEASURED_DATA_DIR / name) for name in registered_files()],
     params:
@@ -40,6 +41,7 @@ rule measured_fetch_files:
 
 
 rule measured_fetch:
+    """Fetch the public measured curves (the target a user names; a target that reads them fetches them too)."""
     input:
         rules.measured_fetch_files.output,
 
@@ -50,6 +52,7 @@ def measured_inputs(wildcards):
 
 
 rule measured_import:
+    """One measured test (its conditions YAML and curve files) to results/measured/<test>.nc."""
     input:
         measured_inputs,
     output:
@@ -65,6 +68,7 @@ rule measured_import:
 
 
 rule measured_all:
+    """Every measured test under measured.tests_dir imported."""
     input:
         expand(f"{RESULTS}/measured/{{test}}.nc", test=MEASURED_TESTS),
 
@@ -78,6 +82,7 @@ SIM_CASES = list(range(MEASURED_SIM["cases"]))
 
 
 rule measured_sim_run:
+    """One measured test simulated on one specimen of measured.sim.specimens under the test's p, q and f."""
     input:
         specimen=lambda wc: SIM_SPECIMENS[int(wc.case)],
         conditions=lambda wc: MEASURED_TESTS_DIR / f"{wc.test}.yaml",
@@ -102,6 +107,7 @@ rule measured_sim_run:
 
 
 rule measured_sim_compare:
+    """One measured test beside its simulated cases, on one cycle axis: a netCDF and a figure."""
     input:
         measured=f"{RESULTS}/measured/{{test}}.nc",
         cases=lambda wc: expand(f"{RESULTS}/measured_sim/cases/{wc.test}/case{{case}}.nc",
@@ -117,5 +123,6 @@ rule measured_sim_compare:
 
 
 rule measured_sim:
+    """Every measured test simulated and compared with its measured curves."""
     input:
         expand(f"{RESULTS}/measured_sim/compare/{{test}}.nc", test=MEASURED_TESTS),

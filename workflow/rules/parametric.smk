@@ -21,6 +21,7 @@ wildcard_constraints:
 
 
 rule parametric_setting:
+    """One parameter setting of the parametric study as a calibrated.yaml."""
     output:
         f"{RESULTS}/parametric/settings/{{setting}}.yaml",
     params:
@@ -32,6 +33,7 @@ rule parametric_setting:
 
 
 rule parametric_run:
+    """One box-test case loaded under one parametric setting."""
     input:
         assembled=lambda wc: PARAM_SPECIMENS[int(wc.case)],
         parameters=f"{RESULTS}/parametric/settings/{{setting}}.yaml",
@@ -52,6 +54,7 @@ rule parametric_run:
 
 
 rule parametric:
+    """The parametric study (thesis 4.4): settlement and breakage against F_str_co and mu, slopes and Sobol indices: results/parametric/."""
     input:
         [f"{RESULTS}/parametric/{setting}/case{case}/metrics.nc"
          for setting in PARAM_SETTINGS for case in range(PARAMETRIC["cases"])],

@@ -9,6 +9,7 @@ wildcard_constraints:
 
 
 rule specimen_assemble:
+    """One biaxial specimen of a specimen set assembled at the set's size: results/specimens/<set>/case<k>.nc (a box set is the study's assembled cases)."""
     input:
         bpm=lambda wc: f"{RESULTS}/bpm/{SPECIMENS[wc.set]['database']}.nc",
     output:

@@ -13,6 +13,7 @@ STRENGTH_DIR = f"{RESULTS}/strength/{STRENGTH['specimens']}"
 
 
 rule strength_case:
+    """One monotonic strength test of a biaxial specimen at confining pressure p, through the peak."""
     input:
         specimen=f"{RESULTS}/specimens/{{set}}/case{{case}}.nc",
     output:
@@ -31,6 +32,7 @@ rule strength_case:
 
 
 rule strength_envelope:
+    """A specimen set's strength envelope (q_peak, phi_peak, dilatancy per p) from its strength tests."""
     input:
         lambda wc: expand(f"{RESULTS}/strength/{wc.set}/p{{p}}kPa/case{{case}}.nc",
                           p=[f"{p:g}" for p in STRENGTH_P], case=range(STRENGTH["cases"])),
@@ -43,5 +45,6 @@ rule strength_envelope:
 
 
 rule strength:
+    """The strength envelope of strength.specimens at every p of the measured tests."""
     input:
         f"{STRENGTH_DIR}/envelope.nc",

@@ -4,6 +4,7 @@ from ballaststudy.study.plots import figure_names
 
 
 rule study_aggregate:
+    """Every case's per-cycle metrics with the form databases' properties in one results/study.nc (database x case x cycle)."""
     input:
         metrics=expand(f"{RESULTS}/cases/{{db}}/case{{case}}/metrics.nc", db=NAMES, case=CASES),
         forms=expand(f"{RESULTS}/forms/{{db}}.nc", db=NAMES),
@@ -16,6 +17,7 @@ rule study_aggregate:
 
 
 rule study_iri:
+    """The IRI tables of the study (thesis Table 5-2): each form parameter's relation to each behaviour, with bootstrap intervals."""
     input:
         f"{RESULTS}/study.nc",
     output:
@@ -34,6 +36,7 @@ rule study_iri:
 
 
 rule study_optimise:
+    """The study's ranking, Pareto set, the thesis' findings checked and the optimised gradation (thesis ch. 5)."""
     input:
         f"{RESULTS}/study.nc",
     output:
