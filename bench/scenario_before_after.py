@@ -69,7 +69,8 @@ def small_config(src):
 def run(src, out):
     src, out = Path(src).resolve(), Path(out).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    shutil.copy(src / "Snakefile", out)
+    if (src / "Snakefile").is_file():            # a checkout from before workflow/Snakefile
+        shutil.copy(src / "Snakefile", out)
     for folder in ("workflow", "profiles"):
         shutil.copytree(src / folder, out / folder, dirs_exist_ok=True)
     (out / "config" / "measured").mkdir(parents=True, exist_ok=True)

@@ -108,9 +108,9 @@ WORKFLOW = Path(__file__).resolve().parents[2]
 
 
 def workflow_rules():
-    """[(rule, file, its docstring)] in the order the Snakefile and workflow/rules/*.smk
+    """[(rule, file, its docstring)] in the order workflow/Snakefile and workflow/rules/*.smk
     define them (`snakemake --list-rules` prints the same docstrings)."""
-    files = [WORKFLOW / "Snakefile", *sorted((WORKFLOW / "workflow" / "rules").glob("*.smk"))]
+    files = [WORKFLOW / "workflow" / "Snakefile", *sorted((WORKFLOW / "workflow" / "rules").glob("*.smk"))]
     return [(m.group(1), path.relative_to(WORKFLOW).as_posix(), " ".join(m.group(2).split()))
             for path in files for m in re.finditer(r'(?m)^rule (\w+):\n\s+"""(.*?)"""', path.read_text(), re.S)]
 

@@ -22,7 +22,7 @@ def _config(tmp_path, change):
 
 
 def _copy_workflow(tmp_path):
-    for part in ("Snakefile", "workflow", "config"):
+    for part in ("workflow", "config"):
         src = ROOT / part
         (shutil.copytree(src, tmp_path / part, symlinks=False) if src.is_dir() else shutil.copy(src, tmp_path))
 

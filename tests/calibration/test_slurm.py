@@ -111,7 +111,6 @@ def _small_calibration(cfg, data_dir):
 def small_workflow(tmp_path_factory, measured_data_dir):
     """A workflow folder whose calibrate target is small, everything before it run."""
     d = tmp_path_factory.mktemp("workflow")
-    shutil.copy(ROOT / "Snakefile", d)
     for part in ("workflow", "profiles"):
         shutil.copytree(ROOT / part, d / part, symlinks=False)
     shutil.copytree(ROOT / "config" / "measured", d / "config" / "measured")

@@ -92,7 +92,7 @@ def snakemake_targets(code):
 
 def test_every_snakemake_target_the_guide_names_is_a_rule():
     rules = set()
-    for smk in [ROOT / "Snakefile", *(ROOT / "workflow" / "rules").glob("*.smk")]:
+    for smk in [ROOT / "workflow" / "Snakefile", *(ROOT / "workflow" / "rules").glob("*.smk")]:
         rules |= set(re.findall(r"(?m)^rule (\w+):", smk.read_text()))
     named = snakemake_targets(guide_code())
     wrong = [(str(page), t) for page, t in named if t not in rules]
@@ -134,7 +134,7 @@ def test_every_bench_script_is_in_the_benchmarks_page():
 
 def test_every_rule_has_a_docstring():
     """The targets page and `snakemake --list-rules` read them."""
-    for smk in [ROOT / "Snakefile", *(ROOT / "workflow" / "rules").glob("*.smk")]:
+    for smk in [ROOT / "workflow" / "Snakefile", *(ROOT / "workflow" / "rules").glob("*.smk")]:
         text = smk.read_text()
         bare = re.findall(r'(?m)^rule (\w+):\n(?!\s+""")', text)
         assert not bare, (smk.name, bare)

@@ -171,7 +171,7 @@ def test_the_cuda_backend_is_refused_without_a_gpu(tmp_path):
 
 
 def _workflow(tmp_path, data_dir, change, *options):
-    for part in ("Snakefile", "workflow", "config"):
+    for part in ("workflow", "config"):
         src = ROOT / part
         (shutil.copytree(src, tmp_path / part) if src.is_dir() else shutil.copy(src, tmp_path))
     path = tmp_path / "config" / "config.yaml"

@@ -76,7 +76,7 @@ def test_every_curve_the_shipped_tests_read_is_registered():
 def test_the_workflow_fetches_what_a_target_needs(tmp_path):
     """A target that reads the curves fetches them first (one job); `all` runs without them
     and says how to fetch them."""
-    for part in ("Snakefile", "workflow", "config"):
+    for part in ("workflow", "config"):
         src = ROOT / part
         shutil.copytree(src, tmp_path / part) if src.is_dir() else shutil.copy(src, tmp_path)
     cfg_path = tmp_path / "config" / "config.yaml"

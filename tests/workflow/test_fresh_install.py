@@ -19,7 +19,6 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _tiny_study(d):
-    shutil.copy(ROOT / "Snakefile", d)
     shutil.copytree(ROOT / "workflow", d / "workflow", symlinks=False)
     (d / "config").mkdir()
     dbs = yaml.safe_load((ROOT / "config" / "databases.yaml").read_text())

@@ -29,7 +29,6 @@ def _jobs(log):
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
     d = tmp_path_factory.mktemp("study")
-    shutil.copy(ROOT / "Snakefile", d)
     shutil.copytree(ROOT / "workflow", d / "workflow", symlinks=False)
     shutil.copytree(ROOT / "profiles", d / "profiles")
     (d / "config").mkdir()
@@ -198,7 +197,6 @@ def test_unreadable_config_file_is_one_line(study, content):
 def bare_workflow(tmp_path):
     """The Snakefile, its rules and the shipped config, nothing built: for dry runs that
     must stop before any job."""
-    shutil.copy(ROOT / "Snakefile", tmp_path)
     for folder in ("workflow", "config"):
         shutil.copytree(ROOT / folder, tmp_path / folder)
     return tmp_path
@@ -255,7 +253,6 @@ def test_slurm_profile_dry_run(study):
 @pytest.mark.slow
 def test_whole_chain_runs_and_reruns_only_what_changed(tmp_path):
     d = tmp_path
-    shutil.copy(ROOT / "Snakefile", d)
     shutil.copytree(ROOT / "workflow", d / "workflow", symlinks=False)
     (d / "config").mkdir()
     dbs = yaml.safe_load((ROOT / "config" / "databases.yaml").read_text())

@@ -6,6 +6,7 @@ rule forms_generate:
         nc=f"{RESULTS}/forms/{{db}}.nc",
         stl=f"{RESULTS}/forms/{{db}}.stl.zip",
     params:
+        out_dir=f"{RESULTS}/forms",
         # the database's own definition and the form settings: editing them reruns this job
         definition=lambda w: json.dumps(DATABASES[w.db], sort_keys=True),  # a database, not a section
         forms=trigger("forms"),
@@ -15,7 +16,7 @@ rule forms_generate:
         f"{RESULTS}/logs/forms/{{db}}.log",
     shell:
         "ballaststudy forms generate {wildcards.db} --config {params.config} "
-        "--out {RESULTS}/forms --quiet > {log} 2>&1"
+        "--out {params.out_dir} --quiet > {log} 2>&1"
 
 
 rule forms_report:
@@ -28,8 +29,9 @@ rule forms_report:
                  for f in ("fig_3-9_stones.png", "fig_3-13_particle_numbers.png", "fig_3-14_mass.png",
                            "fig_3-15_shape_index.png", "fig_3-16_particle_length.png")],
     params:
+        out_dir=f"{RESULTS}/forms/report",
         stones=config["forms"]["report_stones"],
     log:
         f"{RESULTS}/logs/forms/report.log",
     shell:
-        "ballaststudy forms report {input} --out {RESULTS}/forms/report --stones {params.stones} > {log} 2>&1"
+        "ballaststudy forms report {input} --out {params.out_dir} --stones {params.stones} > {log} 2>&1"

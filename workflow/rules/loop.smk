@@ -26,12 +26,13 @@ rule horizon:
         nc=f"{RESULTS}/horizon/horizon.nc",
         png=report(f"{RESULTS}/horizon/horizon.png", caption="../report/loop.rst", category="Loop"),
     params:
+        out_dir=f"{RESULTS}/horizon",
         fit_cycles=" ".join(f"{n:g}" for n in LOOP["horizon_fit_cycles"]),
         quantity=LOOP["quantity"],
     log:
         f"{RESULTS}/logs/loop/horizon.log",
     shell:
-        "ballaststudy horizon {input} --out-dir {RESULTS}/horizon --fit-cycles {params.fit_cycles} "
+        "ballaststudy horizon {input} --out-dir {params.out_dir} --fit-cycles {params.fit_cycles} "
         "--quantity {params.quantity} --quiet > {log} 2>&1"
 
 
@@ -50,6 +51,7 @@ rule loop:
         chosen=f"{RESULTS}/loop/chosen.yaml",
         png=report(f"{RESULTS}/loop/curves.png", caption="../report/loop.rst", category="Loop"),
     params:
+        out_dir=f"{RESULTS}/loop",
         loop=trigger("loop"),
         rig=trigger("rig.biaxial.loading", drop=conditioned_keys("biaxial", LOOP["targets"])),
         metrics=trigger("metrics"),
@@ -66,5 +68,5 @@ rule loop:
         f"{RESULTS}/logs/loop/loop.log",
     shell:
         "ballaststudy loop {input.measured} --conditions {input.conditions} --specimens "
-        "{input.specimens} {params.parameters} --horizon {input.horizon} --out-dir {RESULTS}/loop --jobs {threads} "
+        "{input.specimens} {params.parameters} --horizon {input.horizon} --out-dir {params.out_dir} --jobs {threads} "
         "--backend {params.backend} {params.mapping} --config {params.config} --quiet > {log} 2>&1"

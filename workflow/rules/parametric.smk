@@ -63,7 +63,9 @@ rule parametric:
         md=report(f"{RESULTS}/parametric/report.md", caption="../report/parametric.rst", category="Parametric"),
         figures=report([f"{RESULTS}/parametric/{name}.png" for name in ("F_str_co", "mu")],
                        caption="../report/parametric.rst", category="Parametric"),
+    params:
+        out_dir=f"{RESULTS}/parametric",
     log:
         f"{RESULTS}/logs/parametric/report.log",
     shell:
-        "ballaststudy parametric report {input} --out-dir {RESULTS}/parametric --quiet > {log} 2>&1"
+        "ballaststudy parametric report {input} --out-dir {params.out_dir} --quiet > {log} 2>&1"

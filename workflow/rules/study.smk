@@ -26,12 +26,13 @@ rule study_iri:
         md=f"{RESULTS}/study/iri/iri.md",
         heatmap=report(f"{RESULTS}/study/iri/iri_heatmap.png", caption="../report/iri.rst", category="Study"),
     params:
+        out_dir=f"{RESULTS}/study/iri",
         resamples=config["study"]["bootstrap_resamples"],
         seed=config["study"]["bootstrap_seed"],
     log:
         f"{RESULTS}/logs/study/iri.log",
     shell:
-        "ballaststudy study iri {input} --out {RESULTS}/study/iri --resamples {params.resamples} "
+        "ballaststudy study iri {input} --out {params.out_dir} --resamples {params.resamples} "
         "--seed {params.seed} > {log} 2>&1"
 
 
@@ -46,10 +47,11 @@ rule study_optimise:
         figures=report([f"{RESULTS}/study/report/{name}" for name in figure_names()],
                        caption="../report/figures.rst", category="Study"),
     params:
+        out_dir=f"{RESULTS}/study/report",
         resamples=config["study"]["bootstrap_resamples"],
         seed=config["study"]["bootstrap_seed"],
     log:
         f"{RESULTS}/logs/study/optimise.log",
     shell:
-        "ballaststudy study optimise {input} --out {RESULTS}/study/report --resamples {params.resamples} "
+        "ballaststudy study optimise {input} --out {params.out_dir} --resamples {params.resamples} "
         "--seed {params.seed} > {log} 2>&1"
