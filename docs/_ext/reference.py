@@ -6,6 +6,7 @@ sub-models from theirs, a case's per-cycle variables from the metrics writer's t
 Snakemake targets from the rules' docstrings.
 Written into reference/generated/ (not kept in git) before Sphinx reads the sources."""
 import re
+import sys
 from pathlib import Path
 
 from ballaststudy.config import stage_default
@@ -62,35 +63,77 @@ def config_page():
     return "\n".join(lines)
 
 
+def _effect_module_doc(m):
+    """The docstring of the module that defines an effect (its physics, in words)."""
+    for fn in (m.configure, m.hook, m.off):
+        module = sys.modules.get(getattr(fn, "__module__", None) or "")
+        if module is not None and module.__name__.rsplit(".", 1)[-1] != "material" and module.__doc__:
+            return " ".join(module.__doc__.split())
+    return ""
+
+
+def _restrictions(m):
+    found = [text for flag, text in (
+        (m.needs_flat_joints, "needs flat joints: refused with rigid stones"),
+        (m.needs_splitting, "acts on splitting stones: needs `stone_model: rigid` with `rigid_stones.splitting: true`"),
+        (m.needs_rolling, "sets a rolling coefficient: the specimens must be assembled with `rolling_resistance: epsd`"),
+        (m.covariate is not None, f"acts only through the test's covariate `{m.covariate}`: tests without it cannot show it"),
+        (m.hook_only, "acts from the end of the first loading on (an end-of-cycle hook): its runs share the plain model's first loading"),
+    ) if flag]
+    return found or ["none"]
+
+
+def modifier_page(name, m):
+    no_effect = m.off({}) if m.off else None
+    lines = [f"# `{name}`", "", _cell(m.mechanism), ""]
+    doc = _effect_module_doc(m) if m.role == "effect" else ""
+    if doc:
+        lines += [doc, ""]
+    usage = (f"`loop.effects: [..., {name}]`, or `ballaststudy case run ... --effect {name}:"
+             + ",".join(f"{p.name}=VALUE" for p in m.parameters) + "`") if m.role == "effect" else \
+        f"`calibration.parameters: {{{name}: {{min: ..., max: ...}}}}`"
+    lines += ["## Syntax", "", usage, "", "## Parameters", "",
+              "| parameter | long name | units | low | high | no-effect value |", "|---|---|---|---|---|---|"]
+    lines += [f"| `{p.name}` | {_cell(p.long_name)} | {_cell(p.units)} | {p.low:g} | {p.high:g} | "
+              f"{'-' if no_effect is None else _cell(no_effect.get(p.name, '-'))} |" for p in m.parameters]
+    lines += ["", "## Restrictions", ""] + [f"- {r}" for r in _restrictions(m)]
+    return "\n".join(lines) + "\n"
+
+
 def modifiers_page():
     lines = ["# Effects and material parameters", "",
              "The registry of modifiers (`ballaststudy.scenario.modifiers`): the material "
-             "parameters a calibration varies and the effects the loop chooses among.", ""]
+             "parameters a calibration varies and the effects the loop chooses among, one page "
+             "each.", ""]
     for role, title in (("material", "Material parameters"), ("effect", "Effects")):
-        lines += [f"## {title}", ""]
-        for name, m in MODIFIERS.items():
-            if m.role != role:
-                continue
-            lines += [f"### `{name}`", "", _cell(m.mechanism), "",
-                      "| parameter | long name | units | low | high |", "|---|---|---|---|---|"]
-            lines += [f"| `{p.name}` | {_cell(p.long_name)} | {_cell(p.units)} | {p.low:g} | {p.high:g} |"
-                      for p in m.parameters]
-            lines.append("")
+        names = [n for n, m in MODIFIERS.items() if m.role == role]
+        lines += [f"## {title}", "", "```{toctree}", ":maxdepth: 1", ""] + [f"modifiers/{n}" for n in names] + ["```", ""]
     return "\n".join(lines)
+
+
+def submodel_page(sm):
+    lines = [f"# `{sm.name}` ({sm.kind})", "", _cell(sm.doc), "",
+             "## Syntax", "",
+             f"`ContactLaw(..., {sm.kind}=\"{sm.name}\")` picks it for the {sm.kind} part of a contact law "
+             "(`ballaststudy.dem.law`); its coefficients are set per material pair with "
+             "`Simulation.set_contact_coefficient(name, value, material_a, material_b)`.", "",
+             "## Coefficients", ""]
+    lines += [f"- `{c}`" for c in sm.coefficients] or ["none"]
+    lines += ["", "## State", "", f"History columns (reset when the contact opens): {sm.history}; "
+              f"persistent per-contact state: {', '.join(sm.state) or 'none'}. Both are checkpointed.", "",
+              "The equations: [the physics](../../../explanation/physics.md)."]
+    return "\n".join(lines) + "\n"
 
 
 def submodels_page():
     lines = ["# Contact sub-models", "",
              "A contact law is one sub-model per kind (normal, damping, tangential, rolling), "
              "registered in `ballaststudy.dem.law`; their coefficients are columns of the "
-             "per-material-pair table ([contact laws](../../explanation/contact-laws.md)).", ""]
+             "per-material-pair table ([contact laws](../../explanation/contact-laws.md)), one page each.", ""]
     for kind in KINDS:
-        lines += [f"## {kind}", "", "| sub-model | coefficients | history columns | state | law |",
-                  "|---|---|---|---|---|"]
-        lines += [f"| `{sm.name}` | {', '.join(f'`{c}`' for c in sm.coefficients) or '-'} | {sm.history} | "
-                  f"{', '.join(sm.state) or '-'} | {_cell(sm.doc)} |"
-                  for (k, _), sm in SUBMODELS.items() if k == kind]
-        lines.append("")
+        lines += [f"## {kind}", "", "```{toctree}", ":maxdepth: 1", ""]
+        lines += [f"submodels/{kind}-{sm.name}" for (k, _), sm in SUBMODELS.items() if k == kind]
+        lines += ["```", ""]
     return "\n".join(lines)
 
 
@@ -129,8 +172,11 @@ def write_pages(app=None):
     GENERATED.mkdir(parents=True, exist_ok=True)
     pages = {"config.md": config_page(), "modifiers.md": modifiers_page(), "submodels.md": submodels_page(),
              "metrics.md": metrics_page(), "rules.md": rules_page()}
+    pages.update({f"modifiers/{n}.md": modifier_page(n, m) for n, m in MODIFIERS.items()})
+    pages.update({f"submodels/{sm.kind}-{sm.name}.md": submodel_page(sm) for sm in SUBMODELS.values()})
     for name, text in pages.items():
         path = GENERATED / name
+        path.parent.mkdir(exist_ok=True)
         if not path.is_file() or path.read_text() != text:
             path.write_text(text)
 
