@@ -51,7 +51,6 @@ class BiaxialParams(DepositionParams):
     realtime_added_inertia_max: float = 0.0     # real time: density scaling adds at most this
     failure_axial_strain: float = 0.15   # a stress-controlled specimen beyond this has failed
     softening_strain: float = 0.02       # ... or once q fell past its peak over this strain (peak.py)
-    cycles: int = 100
     control_every: int = 10
     loading_dt_factor: float = 2.0
     checkpoint_every: int = 50
