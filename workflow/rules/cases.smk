@@ -16,7 +16,7 @@ rule case_assemble:
     output:
         f"{RESULTS}/cases/{{db}}/case{{case}}/assembled.nc",
     params:
-        assembly=trigger("rig.box.assembly"),   # editing the assembly section: reassemble
+        assembly=box_assembly_trigger(),   # editing the assembly section (or the plate's moves): reassemble
         config=CONFIG_FILE,
     log:
         f"{RESULTS}/logs/cases/{{db}}/case{{case}}_assemble.log",

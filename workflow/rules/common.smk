@@ -2,6 +2,7 @@
 import json
 from pathlib import Path
 
+from ballaststudy.config import stage_default
 from ballaststudy.measured.importer import load_conditions
 from ballaststudy.scenario.scenario import conditioned_keys as _conditioned_keys
 
@@ -21,6 +22,17 @@ def trigger(*dotted, drop=()):
     parts = {d: {k: v for k, v in section(d).items() if k not in drop} if isinstance(section(d), dict)
              else section(d) for d in dotted}
     return json.dumps(parts[dotted[0]] if len(dotted) == 1 else parts, sort_keys=True)
+
+
+def box_assembly_trigger():
+    """The box assembly's rerun trigger: its section, and the loading's control_every where
+    it is not its default - the plate is lowered onto the stones in moves of that many
+    steps, so it shapes the specimen (at the default the trigger is the section alone, as
+    it was before control_every was read here)."""
+    every = section("rig.box.loading").get("control_every")
+    if every in (None, stage_default("rig.box.loading", "control_every")):
+        return trigger("rig.box.assembly")
+    return json.dumps({"assembly": section("rig.box.assembly"), "plate_moves_steps": every}, sort_keys=True)
 
 
 def stones_trigger():
