@@ -23,6 +23,11 @@ def _cell(text):
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+def _toctree(title, entries):
+    """A section titled ``title`` listing the pages ``entries``."""
+    return [f"## {title}", "", "```{toctree}", ":maxdepth: 1", "", *entries, "```", ""]
+
+
 def _is_leaf(node):
     return "properties" not in node
 
@@ -106,8 +111,7 @@ def modifiers_page():
              "parameters a calibration varies and the effects the loop chooses among, one page "
              "each.", ""]
     for role, title in (("material", "Material parameters"), ("effect", "Effects")):
-        names = [n for n, m in MODIFIERS.items() if m.role == role]
-        lines += [f"## {title}", "", "```{toctree}", ":maxdepth: 1", ""] + [f"modifiers/{n}" for n in names] + ["```", ""]
+        lines += _toctree(title, [f"modifiers/{n}" for n, m in MODIFIERS.items() if m.role == role])
     return "\n".join(lines)
 
 
@@ -131,9 +135,7 @@ def submodels_page():
              "registered in `ballaststudy.dem.law`; their coefficients are columns of the "
              "per-material-pair table ([contact laws](../../explanation/contact-laws.md)), one page each.", ""]
     for kind in KINDS:
-        lines += [f"## {kind}", "", "```{toctree}", ":maxdepth: 1", ""]
-        lines += [f"submodels/{kind}-{sm.name}" for (k, _), sm in SUBMODELS.items() if k == kind]
-        lines += ["```", ""]
+        lines += _toctree(kind, [f"submodels/{kind}-{sm.name}" for (k, _), sm in SUBMODELS.items() if k == kind])
     return "\n".join(lines)
 
 
