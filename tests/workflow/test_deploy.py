@@ -7,6 +7,7 @@ snakedeploy's local provider writes the module's Snakefile as a path relative to
 deployment (`workflow/Snakefile`), which Snakemake reads as the deployment's own file; a
 deployment from GitHub names the repository instead (`github(..., path=
 "workflow/Snakefile")`). The test points the module at the clone's Snakefile, as that does."""
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -31,6 +32,7 @@ def test_snakedeploy_deployment_dry_runs(tmp_path):
     assert (dest / "config" / "config.yaml").is_file() and (dest / "config" / "README.md").is_file()
     assert (dest / "profiles" / "slurm").is_dir() and (dest / "LICENSE").is_file()
     snakefile.write_text(text.replace('"workflow/Snakefile"', f'"{clone / "workflow" / "Snakefile"}"'))
+    shutil.rmtree(clone / "src")        # as from GitHub: the module has its workflow/, the package is installed
     plan = _run(["snakemake", "-n"], dest)
     assert "forms_generate" in plan.stdout and "study_optimise" in plan.stdout
     assert "measured_fetch" in plan.stderr            # the note on the measured curves
