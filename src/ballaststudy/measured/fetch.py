@@ -35,7 +35,7 @@ def fetch(data_dir, url=SOURCE_URL, names=None):
     store = pooch.create(path=Path(data_dir), base_url=url if url.endswith("/") else url + "/", registry=None)
     store.load_registry(REGISTRY)
     paths = []
-    for name in registered_files() if names is None else names:
+    for name in list(store.registry) if names is None else names:     # the registry's order
         if name not in store.registry:
             raise ConfigError(REGISTRY, name, "is not a registered curve file")
         try:
