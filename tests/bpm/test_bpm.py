@@ -19,6 +19,8 @@ from ballaststudy.config import ConfigError
 from ballaststudy.dem import ContactMaterial, FlatJointMaterial, Simulation
 from ballaststudy.forms.database import stone_profiles
 
+from ..netcdf_documented import assert_documented
+
 MATERIALS = {"hard": {"mass_fraction": 0.7, "density_kg_m3": 2850.0},
              "soft": {"mass_fraction": 0.3, "density_kg_m3": 2620.0}}
 PARAMS = BpmParams(max_stones=10)
@@ -243,3 +245,11 @@ def test_a_stone_does_not_depend_on_the_others_selected():
     alone = build_stones([b], [1], p, seed=3, ids=[9])
     assert np.array_equal(pair[1].r, alone[0].r)
     assert not np.array_equal(build_stones([b], [1], p, seed=3, ids=[8])[0].r, alone[0].r)
+
+
+def test_documented_netcdf_forms(forms_file):
+    assert_documented(forms_file, "forms")
+
+
+def test_documented_netcdf_bpm(library):
+    assert_documented(library[2], "bpm")

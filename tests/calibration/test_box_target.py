@@ -11,6 +11,8 @@ import yaml
 from ballaststudy.cli import main
 from ballaststudy.config import ConfigError
 from ballaststudy.rig.params import RigParams
+from ..biaxial_fast import FAST_LOADING
+from ..netcdf_documented import assert_documented
 from ..shipped import shipped_config
 
 ASSEMBLY = dict(drop_max_steps=200000, tamping_steps=8000, relax_steps=2000, fill_area_ratio=0.7)
@@ -96,14 +98,46 @@ def test_calibration_runs_the_model_case_run_runs(box_target):
     assert planted_curve[-1] > 0                            # it settles
 
 
-def test_calibrate_a_box_test_end_to_end(box_target, tmp_path):
+@pytest.fixture(scope="module")
+def box_calibration(box_target, tmp_path_factory):
+    """The output folder of `ballaststudy calibrate` on the box target."""
+    d, config, conditions, measured, specimens, planted = box_target
+    out = tmp_path_factory.mktemp("box_calibration") / "cal"
+    assert main(["calibrate", str(measured), "--conditions", str(conditions), "--specimens", *map(str, specimens),
+                 "--config", str(config), "--quiet", "--out-dir", str(out), "--jobs", "2"]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def triaxial_calibration(tmp_path_factory, small_library):
+    """The output folder of `ballaststudy calibrate` on a planted triaxial test, at the least
+    it runs: one small biaxial specimen given for both cases, 3 sets of 3 cycles (~6 s)."""
+    from ballaststudy.measured.importer import import_test
+    d = tmp_path_factory.mktemp("triaxial_calibration")
+    def change(cfg):
+        cfg["rig"]["biaxial"]["loading"].update(FAST_LOADING)
+        cfg["calibration"].update(quantity="axial_strain", cases=2, cycles=3, initial_design=2, iterations=0,
+                                  parameters={"mu": {"min": 0.4, "max": 1.2}}, posterior_samples=1024)
+    config = shipped_config(d / "config.yaml", change)
+    specimen = d / "s.nc"
+    assert main(["case", "assemble", str(small_library), "--case", "0", "--rig", "biaxial", "--width-m", "0.12",
+                 "--height-m", "0.24", "--config", str(config), "--out", str(specimen), "--quiet"]) == 0
+    conditions = d / "t.yaml"
+    conditions.write_text(yaml.safe_dump(dict(
+        source="planted", rig="triaxial", confining_pressure_kPa=30.0, deviator_min_kPa=10.0, deviator_max_kPa=50.0,
+        curves=[dict(file="t.dat", quantity="axial_strain", units="1", sign="compression_positive")])))
+    (d / "t.dat").write_text("1, 0.001\n1.7, 0.0013\n2.5, 0.0015\n")
+    import_test(conditions, d / "t.nc")
+    out = d / "cal"
+    assert main(["calibrate", str(d / "t.nc"), "--conditions", str(conditions), "--specimens", str(specimen),
+                 str(specimen), "--config", str(config), "--quiet", "--out-dir", str(out), "--jobs", "2"]) == 0
+    return out
+
+
+def test_calibrate_a_box_test_end_to_end(box_calibration):
     """`ballaststudy calibrate` on box specimens: every output, settlement in metres, the
     case count; a strain quantity or a triaxial test with box specimens: one line, exit 2."""
-    d, config, conditions, measured, specimens, planted = box_target
-    out = tmp_path / "cal"
-    argv = ["calibrate", str(measured), "--conditions", str(conditions), "--specimens",
-            *map(str, specimens), "--config", str(config), "--quiet"]
-    assert main(argv + ["--out-dir", str(out), "--jobs", "2"]) == 0
+    out = box_calibration
     doc = yaml.safe_load((out / "calibrated.yaml").read_text())
     assert doc["quantity"] == "settlement" and doc["dem_cases"] == 2 * 4     # 3 + the calibrated set
     assert 0.4 <= doc["parameters"]["mu"] <= 1.2 and np.isfinite(doc["rmse_after"])
@@ -143,3 +177,12 @@ def test_box_specimens_refuse_other_tests(box_target, tmp_path, capsys):
         line = capsys.readouterr().err.strip()
         assert "\n" not in line and key in line, line
         assert not out.exists() or not any(out.rglob("*"))
+
+
+def test_documented_netcdf_evaluations(box_calibration, triaxial_calibration):
+    for out in (box_calibration, triaxial_calibration):
+        assert_documented(out / "evaluations.nc", "evaluations")
+
+
+def test_documented_netcdf_posterior(box_calibration):
+    assert_documented(box_calibration / "posterior.nc", "posterior")

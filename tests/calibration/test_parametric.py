@@ -14,6 +14,8 @@ from ballaststudy.calibration.parametric import (design_sets, findings, parametr
                                                  sensitivity_table, slope_table)
 from ballaststudy.cli import main
 
+from ..netcdf_documented import assert_documented
+
 
 def _write(path, final, cycles, k, values):
     ds = xr.Dataset({"settlement": ("cycle", np.linspace(0, final, cycles)),
@@ -94,12 +96,18 @@ def test_setting_cli(tmp_path, capsys):
         assert not (tmp_path / "bad.yaml").exists()
 
 
-def test_report_cli_writes_every_file(tmp_path):
+def _report(tmp_path):
+    """`parametric report` on small planted settings and design runs: its folder."""
     paths = (_plant(tmp_path, "F_str_co", [2.0, 3.5, 5.0], lambda f: 0.01 - 0.001 * f, cases=2, cycles=3)
              + _plant(tmp_path, "mu", [0.5, 0.7], lambda m: 0.004, cases=2, cycles=3)
              + _plant_design(tmp_path, lambda f, m: 0.01 - 0.001 * f + 0.01 * m, sets=4, cycles=3))
     out = tmp_path / "out"
     assert main(["parametric", "report", *map(str, paths), "--out-dir", str(out), "--quiet"]) == 0
+    return out
+
+
+def test_report_cli_writes_every_file(tmp_path):
+    out = _report(tmp_path)
     for name in ("parametric.nc", "report.md", "F_str_co.png", "mu.png", "report.md.prov.json"):
         assert (out / name).is_file(), name
     text = (out / "report.md").read_text()
@@ -108,3 +116,7 @@ def test_report_cli_writes_every_file(tmp_path):
     with xr.open_dataset(out / "parametric.nc") as ds:
         assert ds.sizes["run"] == 18 and ds["settlement"].attrs["units"] == "m"
         assert len(json.loads(ds.attrs["sobol_indices_json"])) == 4
+
+
+def test_documented_netcdf_parametric(tmp_path):
+    assert_documented(_report(tmp_path) / "parametric.nc", "parametric")

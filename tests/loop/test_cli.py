@@ -19,6 +19,7 @@ from ballaststudy.config import load_config
 from ballaststudy.rig.kinds import params_from_config
 
 from ..biaxial_fast import FAST_LOADING
+from ..netcdf_documented import assert_documented
 from ..shipped import shipped_config
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -65,14 +66,22 @@ def _argv(tiny, out, config=None):
             *map(str, specimens), "--out-dir", str(out), "--config", str(config or cfg), "--quiet"]
 
 
-def test_loop_end_to_end(tiny, tmp_path):
-    out = tmp_path / "loop"
-    horizon = tmp_path / "horizon"
+@pytest.fixture(scope="module")
+def loop_run(tiny, tmp_path_factory):
+    """(out folder, horizon law, loop.nc as written) of the loop on the tiny tests with the
+    horizon table of their curves (test_loop_end_to_end runs it again in the folder)."""
+    d = tmp_path_factory.mktemp("loop_run")
+    out, horizon = d / "loop", d / "horizon"
     assert main(["horizon", *map(str, tiny[2]), "--out-dir", str(horizon), "--fit-cycles", "5", "--quiet"]) == 0
     with xr.open_dataset(horizon / "horizon.nc") as ds:
         law = str(ds["chosen_law"].values[0])
-    assert law in ("log", "hardening_log")              # the planted log law (hardening_log nests it)
     assert main(_argv(tiny, out) + ["--jobs", "2", "--horizon", str(horizon / "horizon.nc")]) == 0
+    return out, law, shutil.copy(out / "loop.nc", d / "loop.nc")
+
+
+def test_loop_end_to_end(tiny, loop_run):
+    out, law, _ = loop_run
+    assert law in ("log", "hardening_log")              # the planted log law (hardening_log nests it)
     text = (out / "report.md").read_text()
     assert "## DEM horizon" in text and "## Long-term horizon (extrapolated, reported apart)" in text
     assert f"fitted by the **{law}** law, the law that carried 3 measured curves best from N <= 5" in text
@@ -107,6 +116,10 @@ def test_loop_end_to_end(tiny, tmp_path):
     assert main(_argv(tiny, out)) == 0                   # again: every case reused (no law: nothing extrapolated)
     assert "No accumulation law given" in (out / "report.md").read_text()
     assert [p.stat().st_mtime_ns for p in cached] == stamp
+
+
+def test_documented_netcdf_loop(loop_run):
+    assert_documented(loop_run[2], "loop")
 
 
 @pytest.mark.parametrize("change, key", [

@@ -12,6 +12,7 @@ from ballaststudy.cli import main
 from ballaststudy.loop.accumulation import LAWS, fit_law, hardening_log
 from ballaststudy.loop.horizon import chosen_for, enters, horizon_table, measured_curve
 from ..measured.test_import import write_test
+from ..netcdf_documented import assert_documented
 
 FAR = 5e5
 GRID = np.geomspace(1.0, FAR, 40)            # a measured curve's cycle counts, log-spaced
@@ -92,7 +93,8 @@ def test_the_loop_takes_the_nearest_n_fit_at_or_beyond_its_horizon():
     assert chosen_for(none, 12) is None
 
 
-def test_the_command_writes_the_table_from_measured_tests(tmp_path):
+def _imported(tmp_path):
+    """Two measured tests on a hardening-log law, imported: their files."""
     n = np.concatenate([[0.97], GRID[1:]])    # the first loading digitised left of N = 1
     v = hardening_log(np.maximum(n, 1.0), (0.005, 0.05, 0.01, 0.003))
     files = []
@@ -102,6 +104,11 @@ def test_the_command_writes_the_table_from_measured_tests(tmp_path):
         write_test(d, axial="".join(f"{a}, {b}\n" for a, b in zip(n, v * (1 + 0.1 * k))))
         files.append(tmp_path / "measured" / f"set{k}" / "t.nc")
         assert main(["measured", "import", str(d / "test.yaml"), "--out", str(files[-1]), "--quiet"]) == 0
+    return files
+
+
+def test_the_command_writes_the_table_from_measured_tests(tmp_path):
+    files = _imported(tmp_path)
     n1, _ = measured_curve(files[0], "axial_strain")
     assert n1[0] == 1.0 and np.all(np.diff(n1) > 0)
     out = tmp_path / "horizon"
@@ -118,3 +125,10 @@ def test_bad_fit_cycles_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert stop.value.code == 2
     assert "--fit-cycles" in err and len(err.strip().splitlines()) == 1
+
+
+def test_documented_netcdf_horizon(tmp_path):
+    out = tmp_path / "horizon"
+    assert main(["horizon", *map(str, _imported(tmp_path)), "--out-dir", str(out), "--fit-cycles", "1000",
+                 "--quiet"]) == 0
+    assert_documented(out / "horizon.nc", "horizon")

@@ -5,6 +5,7 @@ import xarray as xr
 
 from ballaststudy.cli import main
 
+from tests.netcdf_documented import assert_documented
 from .test_import import write_test
 
 
@@ -90,3 +91,12 @@ def test_the_stress_mapping_of_the_cases_is_named(tmp_path):
     with xr.open_dataset(out) as ds:
         assert {k: ds.attrs[k] for k in record} == record
     assert out.with_suffix(".png").stat().st_size > 1000
+
+
+def test_documented_netcdf_measured_compare(tmp_path):
+    measured = tmp_path / "measured.nc"
+    assert main(["measured", "import", str(write_test(tmp_path)), "--out", str(measured), "--quiet"]) == 0
+    cases = [fake_case(tmp_path / f"c{k}.nc", [0.001, 0.002]) for k in range(2)]
+    out = tmp_path / "cmp.nc"
+    assert main(["measured", "compare", str(measured), *map(str, cases), "--out", str(out), "--quiet"]) == 0
+    assert_documented(out, "measured_compare")

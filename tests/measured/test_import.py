@@ -13,6 +13,8 @@ import yaml
 from ballaststudy.cli import main
 from ballaststudy.measured import measured_dataset
 
+from tests.netcdf_documented import assert_documented
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -116,3 +118,9 @@ def test_every_shipped_test_imports(measured_data_dir):
         assert set(ds.data_vars) == {"axial_strain", "volumetric_strain"}, path
         assert np.all(np.diff(ds["cycle"].values) > 0), path
         assert np.isfinite(ds["axial_strain"].values).sum() >= 3, path
+
+
+def test_documented_netcdf_measured(tmp_path):
+    out = tmp_path / "test.nc"
+    assert main(["measured", "import", str(write_test(tmp_path)), "--out", str(out), "--quiet"]) == 0
+    assert_documented(out, "measured")

@@ -12,6 +12,7 @@ from ballaststudy.rig.biaxial import (AXIAL, KPA, BiaxialParams, BiaxialRig, Bia
 from ballaststudy.rig.library import load_library
 
 from ..biaxial_fast import FAST_LOADING
+from ..netcdf_documented import assert_documented
 
 SMALL = dict(width_m=0.15, height_m=0.30, drop_max_steps=200000, relax_steps=2000,
              fill_area_ratio=0.9, checkpoint_every=1, deviator_min_kPa=10.0,
@@ -439,3 +440,9 @@ def test_case_assemble_takes_the_specimen_size(small_library, tmp_path, capsys):
     line = capsys.readouterr().err.strip()
     assert "rig.kind: box: --width-m is for a biaxial specimen" in line and "\n" not in line
     assert not (tmp_path / "box.nc").exists()
+
+
+def test_documented_netcdf_assembled(assembled, specimen, membrane_specimen):
+    """A box case (tests/rig/conftest.py), a biaxial specimen and one with a membrane."""
+    for path in (assembled[0], specimen, membrane_specimen):
+        assert_documented(path, "assembled")

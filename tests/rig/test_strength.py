@@ -12,8 +12,10 @@ import pytest
 from ballaststudy.cli import main
 from ballaststudy.rig.biaxial import BiaxialParams, assemble_biaxial
 from ballaststudy.rig.biaxial.strength import (_peak, inertial_strain_rate, run_strength,
-                                               strength_dataset, strength_envelope)
+                                               strength_dataset)
 from ballaststudy.rig.library import load_library
+
+from ..netcdf_documented import assert_documented
 
 P = 30.0e3
 
@@ -105,3 +107,20 @@ def test_the_test_stops_on_the_peak_it_reports(small_library):
     assert r.peak_reached and float(m[1]) * 1e3 == pytest.approx(r.q_peak, rel=0.005)
     assert float(m[2]) == pytest.approx(r.axial_strain_at_peak, abs=2e-4)
     assert 0.003 <= r.axial_strain[-1] - r.axial_strain_at_peak < 0.006
+
+
+def _strength_file(strength, p_kPa, case, path):
+    """The strength fixture's test as `case strength` writes it, at p and case."""
+    strength_dataset(strength[1], p_kPa, {"case": case, "specimen": "assembled.nc"}).to_netcdf(path)
+    return path
+
+
+def test_documented_netcdf_strength_case(strength, tmp_path):
+    assert_documented(_strength_file(strength, P / 1e3, 0, tmp_path / "case0.nc"), "strength_case")
+
+
+def test_documented_netcdf_strength_envelope(strength, tmp_path):
+    tests = [_strength_file(strength, p, 0, tmp_path / f"p{p:g}.nc") for p in (30.0, 60.0)]
+    out = tmp_path / "envelope.nc"
+    assert main(["case", "envelope", *map(str, tests), "--out", str(out), "--quiet"]) == 0
+    assert_documented(out, "strength_envelope")

@@ -13,6 +13,8 @@ from ballaststudy.provenance import sha256_file
 from ballaststudy.study import BEHAVIOURS, aggregate
 from ballaststudy.study.cli import register
 
+from ..netcdf_documented import assert_documented
+
 # 8 stones, b in mm, mass in kg: percent passing at 80 ... 8 mm = 100 80 70 60 50 40 30 20
 B_MM = [70, 55, 45, 35, 25, 20, 12, 5]
 MASS = [2, 1, 1, 1, 1, 1, 1, 2]
@@ -200,3 +202,8 @@ def test_the_stone_model_is_named_and_one_per_study(tmp_path, inputs):
     with pytest.raises(ConfigError, match="stone_model.*one stone model in a study"):
         aggregate(metrics, forms, tmp_path / "c.nc")
     assert not (tmp_path / "c.nc").exists()
+
+
+def test_documented_netcdf_study(tmp_path, inputs):
+    metrics, forms = inputs
+    assert_documented(aggregate(metrics, forms, tmp_path / "study.nc"), "study")

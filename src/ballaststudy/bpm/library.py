@@ -171,7 +171,7 @@ def to_dataset(forms, index, stones, params, seed, provenance_json):
         "seed": int(seed),
         "provenance": provenance_json,
     }
-    coords = {"stone": np.arange(len(stones))}
+    coords = {"stone": ("stone", np.arange(len(stones)), {"units": "1", "long_name": "stone index in the library"})}
     return xr.Dataset(v, coords=coords, attrs=attrs)
 
 

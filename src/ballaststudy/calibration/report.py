@@ -38,7 +38,7 @@ def evaluations_dataset(names, sets, rounds, points, point_test, measured, cycle
         "measured_" + quantity: ("point", measured, {"units": units, "long_name": "measured " + long_name}),
         "measured_cycle": ("point", points, {"units": "1", "long_name": "load cycle N of the measured point"}),
         "point_test": ("point", np.asarray(point_test, np.int32), {"units": "1", "long_name": "target test of the point"}),
-    }, coords={"parameter": ("parameter", list(names)),
+    }, coords={"parameter": ("parameter", list(names), {"long_name": "calibrated parameter"}),
                "cycle": ("cycle", n, {"units": "1", "long_name": "load cycle number N (cycle 0 of the rig = N 1)"}),
                "test": ("test", np.arange(curves.shape[1]), {"units": "1", "long_name": "target test (attribute targets)"}),
                "case": ("case", np.arange(curves.shape[2]), {"units": "1", "long_name": "specimen"})},
@@ -52,7 +52,9 @@ def posterior_dataset(names, post, attrs):
         "posterior_mean": ("parameter", post.mean, {"units": "1", "long_name": "posterior mean"}),
         "interval90": (("parameter", "bound"), post.interval90, {"units": "1", "long_name": "posterior 5 % and 95 % quantiles"}),
         "correlation": (("parameter", "parameter2"), post.correlation, {"units": "1", "long_name": "posterior correlation"}),
-    }, coords={"parameter": list(names), "parameter2": list(names), "bound": ["q05", "q95"]},
+    }, coords={"parameter": ("parameter", list(names), {"long_name": "calibrated parameter"}),
+               "parameter2": ("parameter2", list(names), {"long_name": "calibrated parameter (correlation's columns)"}),
+               "bound": ("bound", ["q05", "q95"], {"long_name": "quantile of the 90 % interval"})},
         attrs={"Conventions": CF, "title": "calibration posterior", "effective_sample_size": float(post.ess), **attrs})
 
 

@@ -71,7 +71,9 @@ def to_dataset(objective, stones, seed, params, provenance_json):
         "objective_percent_passing": _var(np.array(objective.percent_passing), "sieve", "percent",
                                           "objective percent passing by mass"),
     }
-    coords = {"stone": np.arange(len(stones)), "xyz": ["x", "y", "z"], "xy": ["a", "b"],
+    coords = {"stone": _var(np.arange(len(stones)), "stone", "1", "stone index in the database"),
+              "xyz": ("xyz", ["x", "y", "z"], {"long_name": "vertex coordinate"}),
+              "xy": ("xy", ["a", "b"], {"long_name": "profile coordinate: along the stone's a and b"}),
               "sieve": _var(np.array(GRADING_SIEVES_MM) * 1e-3, "sieve", "m", "square-mesh sieve size")}
     attrs = {
         "title": f"ballast form database {objective.name}",

@@ -27,7 +27,8 @@ def loop_dataset(run, stats):
         data["after"] = (("test", "case", "cycle"), sel.after["curves"],
                          {"units": units, "long_name": "chosen effect at its fitted value: simulated " + long_name})
     return xr.Dataset(data, coords={
-        "effect": ("effect", list(sel.candidates)), "test": ("test", [r["test"] for r in stats.before]),
+        "effect": ("effect", list(sel.candidates), {"long_name": "candidate effect (scenario/modifiers)"}),
+        "test": ("test", [r["test"] for r in stats.before], {"long_name": "measured test"}),
         "cycle": ("cycle", run.cycles, {"units": "1", "long_name": "load cycle number N"}),
         "case": ("case", np.arange(run.cases), {"units": "1", "long_name": "specimen"})},
         attrs={"Conventions": CF, "title": "closing the loop with measured data",

@@ -87,7 +87,8 @@ def horizon_table(curves, fit_cycles, quantity="axial_strain"):
                      {"units": "1", "long_name": "1: the curve has a point beyond fit_cycles and enough up to it"}),
          "last_cycle": ("test", last_n, {"units": "1", "long_name": "load cycle N of the curve's last point"}),
          "measured_last": ("test", last_v, {"units": "1", "long_name": f"measured {quantity} at the last point"})},
-        coords={"test": tests, "law": laws,
+        coords={"test": ("test", tests, {"long_name": "measured test"}),
+                "law": ("law", laws, {"long_name": "accumulation law (loop/accumulation.py)"}),
                 "fit_cycles": ("fit_cycles", np.asarray(fit_cycles, float),
                                {"units": "1", "long_name": "N_fit: the law sees the points up to this load cycle"})},
         attrs={"Conventions": "CF-1.8", "title": "long-term horizon: accumulation laws' extrapolation error on "

@@ -189,7 +189,8 @@ def build_study(metrics, forms, groups=None):
     coords = {
         "database": ("database", np.array(dbs, dtype=object), {"long_name": "form database (Table 3-1)"}),
         "case": ("case", np.array(cases, dtype=object if isinstance(cases[0], str) else np.int64),
-                 {"long_name": "simulation case (random selection and packing of stones)"}),
+                 {"long_name": "simulation case (random selection and packing of stones)",
+                  **({} if isinstance(cases[0], str) else {"units": "1"})}),
         "cycle": ("cycle", cycles, {"units": "1", "long_name": "loading cycle"}),
         "sieve": ("sieve", np.array(GRADING_SIEVES_MM) * 1e-3, {"units": "m", "long_name": "square-mesh sieve size"}),
         "group": ("database", np.array([str((groups or {}).get(db, database_group(db, forms[db][1]))) for db in dbs],
