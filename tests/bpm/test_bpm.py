@@ -231,7 +231,12 @@ def test_cli_builds_a_library(forms_file, tmp_path):
     mats = json.loads(ds.attrs["materials_json"])
     assert FlatJointMaterial(**mats["hard"]["flat_joint"]) == FlatJointMaterial.hard()
     assert FlatJointMaterial(**mats["soft"]["flat_joint"]) == FlatJointMaterial.soft()
-    assert mats["hard"]["flat_joint"]["sigma_c"] == pytest.approx(3.5 * 5.4e5)   # F_str-co
+    # F_str-co = 3.5 multiplies both rocks' strength and cohesion (Table 4.2 lists it for
+    # both; 4.4: "each tensile strength and cohesion"): soft stays 1/6.3 (tension) and
+    # 1/23 (cohesion) of hard, as the printed bare values are
+    hard, soft = mats["hard"]["flat_joint"], mats["soft"]["flat_joint"]
+    assert (hard["sigma_c"], hard["c"]) == (pytest.approx(3.5 * 5.4e5), pytest.approx(3.5 * 60.0e5))
+    assert (soft["sigma_c"], soft["c"]) == (pytest.approx(3.5 * 3.0e5), pytest.approx(3.5 * 9.0e5))
     assert ContactMaterial(**mats["soft"]["contact"]) == ContactMaterial()
     assert mats["soft"]["density_kg_m3"] == 2800.0
 

@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from ballaststudy.dem import Simulation
 from ballaststudy.rig.box import BoxRig
+from ballaststudy.rig.deposition import stone_force_ratio
 from ballaststudy.rig.loading import CYCLE_FIELDS, LoadingRun
 from ballaststudy.rig.records import to_dataset
 
@@ -52,6 +54,63 @@ def test_stage_stopped_at_its_limit_is_recorded(small_library, small_params, ass
     speed = float(limits[0].split("speed ")[1].split(" m/s")[0])
     assert speed >= p.settle_speed_m_s
     assert not any(x.startswith("settle") for x in assembled[1].layout.stages_at_limit)
+
+
+class _Pile:
+    """Two one-ball stones for deposition.stone_force_ratio: the specimen interface."""
+    def __init__(self, sim):
+        self.sim = sim
+
+    def stone_balls(self):
+        return np.flatnonzero(self.sim.balls.stone >= 0)
+
+
+def _pile(upper_y):
+    """Stone 0 (r 1 cm) on the floor, stone 1 (r 0.5 cm) at ``upper_y``, resting on it when
+    upper_y is its touching height; settled under damping (stone 1 falls freely above)."""
+    sim = Simulation(gravity=(0.0, -9.81), damping=0.7)
+    sim.add_wall([(-0.1, 0.0), (0.1, 0.0)])
+    sim.add_balls([0.0], [0.01], [0.01], 2650.0, stone_id=0)
+    sim.add_balls([0.0], [upper_y], [0.005], 2650.0, stone_id=1)
+    sim.set_ball_velocity([1], hold=True)
+    sim.run(20000)                           # stone 0 at rest (stone 1 held up there)
+    sim.set_ball_velocity([1], hold=False)
+    sim.run(1)
+    return _Pile(sim)
+
+
+def test_stone_force_ratio_is_pfcs_equilibrium_measure():
+    """Mean |unbalanced force| / mean sum of force magnitudes over the stones (contacts from
+    other stones and walls, weight): one stone at rest on the floor and one falling freely
+    give (0 + m1 g) / (2 m0 g + m1 g) = m1 / (2 m0 + m1) (a wrong sign for a wall contact
+    would count the floor's reaction twice, one for a stone-stone contact the other's
+    weight); stacked at rest, 0."""
+    m0, m1 = 0.01 ** 2, 0.005 ** 2
+    falling = stone_force_ratio(_pile(0.1))
+    assert falling == pytest.approx(m1 / (2 * m0 + m1), rel=1e-3)
+    stacked = _pile(0.025 - 1e-6)
+    stacked.sim.run(20000)
+    assert stone_force_ratio(stacked) < 1e-3
+    assert stone_force_ratio(_pile_free()) == pytest.approx(1.0)
+
+
+def _pile_free():
+    sim = Simulation(gravity=(0.0, -9.81), damping=0.0)
+    sim.add_balls([0.0, 0.1], [0.5, 0.5], [0.01, 0.005], 2650.0, stone_id=0)
+    sim.add_balls([0.3], [0.5], [0.01], 2650.0, stone_id=1)
+    sim.run(1)
+    return _Pile(sim)
+
+
+def test_settling_stages_record_their_end(assembled):
+    """Each settling stage records its steps, speed and the stones' force ratio; the relaxed
+    specimen its force ratio when loading can start."""
+    lay = assembled[1].layout
+    assert set(lay.stage_end) == {"settle after the drop", "settle after tamping", "relax"}
+    for stage in ("settle after the drop", "settle after tamping"):
+        end = lay.stage_end[stage]
+        assert end["steps"] > 0 and end["speed_m_s"] < 0.01 and 0 <= end["force_ratio"] < 1
+    assert 0 <= lay.stage_end["relax"]["force_ratio"] < 1
 
 
 def test_static_force_balance(assembled, small_params):

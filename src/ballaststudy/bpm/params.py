@@ -82,9 +82,9 @@ def materials_json(params):
         }
     out["F_str_co"] = F_STR_CO
     out["F_str_co_note"] = (
-        "applied exactly as Table 4.2 prints it: hard sigma_c = 3.5 * 5.4e5 Pa, c = 3.5 * 60.0e5 "
-        "Pa; the soft entries (3.0e5 Pa, 9.0e5 Pa) are printed without the factor and used as "
-        "printed (ballaststudy.dem.FlatJointMaterial)")
+        "multiplies every strength and cohesion (Table 4.2 lists it for both rocks, 4.4): hard "
+        "sigma_c = 3.5 * 5.4e5 Pa, c = 3.5 * 60.0e5 Pa; soft sigma_c = 3.5 * 3.0e5 Pa, c = 3.5 * "
+        "9.0e5 Pa (ballaststudy.dem.FlatJointMaterial)")
     out["units"] = "SI: E, sigma_c, c in Pa; phi_deg in degrees; density in kg m-3"
     out["source"] = "Wang 2018, Table 4.2 (calibrated parameters)"
     return json.dumps(out, sort_keys=True)

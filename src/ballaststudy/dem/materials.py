@@ -1,11 +1,13 @@
 """Parameter dataclasses. Defaults are the calibrated values of the thesis, Table 4.2
 (Wang 2018, ch. 4.3), hard rock unless stated.
 
-F_str-co (strength and cohesion scaling factor, 3.5 for both rocks) is applied exactly as
-Table 4.2 prints it: sigma_c = F_str-co * 5.4e5 Pa and c = F_str-co * 60.0e5 Pa for hard
-rock, while the soft-rock entries (3.0e5 Pa, 9.0e5 Pa) are printed without the factor and
-are used as printed. ``FlatJointMaterial.scaled`` applies any further factor (the rig's
-bond strengthening while dropping).
+F_str-co (strength and cohesion scaling factor) multiplies every tensile strength and
+cohesion, hard and soft: Table 4.2 lists it as 3.5 for both rocks and 4.4 multiplies "each
+tensile strength and cohesion" by it, though the table prints the factor in the hard
+column's strengths only (sigma_c = F_str-co * 5.4e5 Pa, c = F_str-co * 60.0e5 Pa) and the
+soft column's bare (3.0e5 Pa, 9.0e5 Pa): a factor of 3.5 for soft rock multiplies nothing
+otherwise. ``FlatJointMaterial.scaled`` applies any further factor (the rig's bond
+strengthening while dropping).
 """
 from dataclasses import asdict, dataclass, replace
 
@@ -52,7 +54,7 @@ class FlatJointMaterial:
 
     @classmethod
     def soft(cls):
-        return cls(E=4.0e9, kappa=2.0, sigma_c=3.0e5, c=9.0e5)
+        return cls(E=4.0e9, kappa=2.0, sigma_c=F_STR_CO * 3.0e5, c=F_STR_CO * 9.0e5)
 
     def scaled(self, factor):
         """Same material with tensile strength and cohesion multiplied by ``factor``."""

@@ -20,7 +20,7 @@ from ..dem.materials import STONE_MATERIALS
 from .box import BoxRig, RigLayout
 from .deposition import (centripetal_pulses, choose_stones, deposition_conditions, drop,
                          new_simulation, place_stones, ramp_gravity, remove_debris, settle,
-                         shelf_centres)
+                         shelf_centres, stone_force_ratio)
 
 STEEL = 2        # material id of the plate, loading ball and walls (same LC law, Table 4.2)
 
@@ -222,4 +222,5 @@ def assemble(lib, params, seed, progress=None):
     st["plate"] = settle_plate(rig, progress)
     add_loading_ball(rig)
     st["relax"] = relax(rig, progress)
+    rig.layout.stage_end["relax"] = {"steps": st["relax"], "force_ratio": stone_force_ratio(rig)}
     return rig

@@ -34,6 +34,9 @@ class RigLayout:
     stage_steps: dict = field(default_factory=dict)
     # stages that stopped at their step limit, not at their criterion: one line each
     stages_at_limit: list = field(default_factory=list)
+    # per settling stage its end: steps, mean stone-ball speed [m/s], the stones' force ratio;
+    # "at rest": the stones' force ratio when the assembly ends (deposition.stone_force_ratio)
+    stage_end: dict = field(default_factory=dict)
     stone_model: str = "bonded"     # how the stones are modelled now (ballaststudy.stones)
 
 

@@ -5,7 +5,8 @@ import numpy as np
 
 from ...dem.materials import STONE_MATERIALS
 from ..deposition import (choose_stones, deposition_conditions, drop, new_simulation,
-                          place_stones, ramp_gravity, remove_debris, shelf_centres)
+                          place_stones, ramp_gravity, remove_debris, shelf_centres,
+                          stone_force_ratio)
 from .specimen import MEMBRANE, PLATEN, BiaxialLayout, BiaxialRig, place_membrane
 
 
@@ -85,6 +86,7 @@ def assemble_biaxial(lib, params, seed, progress=None):
     sim.set_damping(p.damping)
     sim.run(p.relax_steps)
     st["relax"] = p.relax_steps
+    lay.stage_end["relax"] = {"steps": p.relax_steps, "force_ratio": stone_force_ratio(rig)}
     if progress is not None:
         progress(p.relax_steps)
     return rig
