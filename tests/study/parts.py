@@ -14,6 +14,7 @@ def part_of(study, keep):
             ds[name] = v.where(keep)
     ds["cycles_run"] = xr.where(keep, ds.cycles_run, 0).astype(np.int32)
     ds["assembly_stages_at_limit"] = xr.where(keep, ds.assembly_stages_at_limit, -1).astype(np.int32)
+    ds["assembly_force_ratio"] = xr.where(keep, ds.assembly_force_ratio, np.nan)
     return ds.isel(database=np.flatnonzero(keep.values.any(axis=1)))
 
 

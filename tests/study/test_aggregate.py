@@ -105,6 +105,22 @@ def test_assembly_stages_at_limit_are_counted_and_reported(tmp_path, synth, inpu
     assert "1 of 2 cases were assembled with a stage stopped at its step limit" in extent_line(ds)
 
 
+def test_force_ratio_when_loading_began_is_kept_and_reported(tmp_path, synth, inputs):
+    """The stones' force ratio at the end of the assembly (the layout's stage_end) per case;
+    NaN where a file does not record it; the report counts the cases not at rest."""
+    from ballaststudy.study.report import extent_line
+    metrics, forms = inputs
+    for key, ratio in ((("G_1-1", 0), 0.003), (("G_1-1", 1), 0.02)):
+        with xr.open_dataset(metrics[key]) as f:
+            ds = f.load()
+        ds.attrs["rig_layout_json"] = json.dumps({"stages_at_limit": [], "stage_end": {"relax": {"force_ratio": ratio}}})
+        ds.to_netcdf(metrics[key])
+    ds = xr.open_dataset(aggregate(metrics, forms, tmp_path / "study.nc")).load()
+    assert ds.assembly_force_ratio.sel(database="G_1-1").values.tolist() == [0.003, 0.02]
+    assert np.isnan(ds.assembly_force_ratio.sel(database="box_test").values).all()
+    assert "largest 0.02; 1 of 2 cases at or above the thesis' equilibrium limit 0.008" in extent_line(ds)
+
+
 def test_units_are_converted(tmp_path, synth, inputs):
     metrics, forms = inputs
     p = tmp_path / "mm.nc"

@@ -34,6 +34,23 @@ def test_a_part_with_fewer_cycles_is_padded(thesis_study):
     assert np.array_equal(last.settlement.values[:, :5], study.sel(database="G_3-5").settlement.values[:, :5])
 
 
+def test_a_part_from_before_the_force_ratio_merges(thesis_study):
+    """A part packed before study.nc kept the stones' force ratio (docs/thesis-scale/parts)
+    merges with one that has it: its cases read NaN."""
+    _, study = thesis_study
+    study = study.copy()
+    planted = np.random.default_rng(0).uniform(1e-3, 1e-2, study.assembly_force_ratio.shape)
+    study["assembly_force_ratio"] = study.assembly_force_ratio.copy(data=planted)
+    a, b = split(study, 8, 8)
+    merged = merge_studies([("a", a.drop_vars("assembly_force_ratio")), ("b", b)])
+    ran_in_a = a.cycles_run.values > 0
+    got = merged.assembly_force_ratio.sel(database=a.database.values).values
+    assert np.isnan(got[ran_in_a]).all()
+    only_b = [d for d in b.database.values if d not in a.database.values]
+    np.testing.assert_array_equal(merged.assembly_force_ratio.sel(database=only_b).values,
+                                  study.assembly_force_ratio.sel(database=only_b).values)
+
+
 def test_a_case_in_two_parts_is_refused(thesis_study):
     _, study = thesis_study
     a, b = split(study, 8, 8)

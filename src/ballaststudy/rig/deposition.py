@@ -15,6 +15,10 @@ import numpy as np
 from ..dem import ContactLaw, ContactMaterial, Simulation
 
 
+# the thesis' equilibrium limit of the mean force ratio (4.2.1, PFC's material-modeling
+# default): a body set below it is at rest (stone_force_ratio)
+EQUILIBRIUM_FORCE_RATIO = 8e-3
+
 # the rolling sub-model's coefficients: keys only with rolling_resistance epsd
 ROLLING_COEFFICIENTS = ("rolling_friction", "rolling_stiffness_ratio", "rolling_damping_ratio")
 
@@ -215,7 +219,7 @@ def settle(specimen, params, stage, progress=None):
     is in equilibrium at a high gravity stays so when the gravity is lowered, while one
     that is still moving would take very long to settle at 9.81 m/s^2 (local damping). On
     thesis-scale piles at 1000 m/s^2 the stones' force ratio is 0.003-0.005 when the speed
-    criterion is met, below the thesis' equilibrium limit 8e-3 (4.2.1). The end state goes
+    criterion is met, below EQUILIBRIUM_FORCE_RATIO. The end state goes
     to the layout's ``stage_end`` under ``stage``; a pile still moving at the guard also to
     its ``stages_at_limit``. Returns the steps run."""
     p, sim = params, specimen.sim

@@ -111,6 +111,13 @@ def _stages_at_limit(ds):
     return len(layout["stages_at_limit"]) if "stages_at_limit" in layout else -1
 
 
+def _force_ratio_at_start(ds):
+    """The stones' force ratio when the case's loading began (its rig layout); NaN where the
+    file does not record it."""
+    layout = json.loads(ds.attrs.get("rig_layout_json", "{}"))
+    return float(layout.get("stage_end", {}).get("relax", {}).get("force_ratio", np.nan))
+
+
 def database_coordinates(forms_ds):
     """Database-level numbers from a form database (generated values, via validation_row)."""
     row = validation_row(forms_ds)
@@ -166,9 +173,11 @@ def build_study(metrics, forms, groups=None):
     arrays = {n: np.full(shape, np.nan) for n in list(BEHAVIOURS) + extra_names}
     run = np.zeros(shape[:2], dtype=np.int32)
     at_limit = np.full(shape[:2], -1, dtype=np.int32)
+    force_ratio = np.full(shape[:2], np.nan)
     for (db, case), (cyc, vals, extra) in series.items():
         i, j = dbs.index(db), cases.index(case if not isinstance(cases[0], str) else str(case))
         at_limit[i, j] = _stages_at_limit(metrics[(db, case)][1])
+        force_ratio[i, j] = _force_ratio_at_start(metrics[(db, case)][1])
         k = np.searchsorted(cycles, cyc)
         for n in BEHAVIOURS:
             arrays[n][i, j, k] = vals[n]
@@ -185,6 +194,10 @@ def build_study(metrics, forms, groups=None):
     data["assembly_stages_at_limit"] = (("database", "case"), at_limit, {
         "units": "1", "long_name": "assembly stages of the case that stopped at their step limit, not "
                                    "at their criterion (its assembled.nc names them; -1: not recorded)"})
+    data["assembly_force_ratio"] = (("database", "case"), force_ratio, {
+        "units": "1", "long_name": "the stones' force ratio when loading began: mean |unbalanced force| / mean "
+                                   "sum of force magnitudes, PFC's equilibrium measure (thesis 4.2.1: at rest below "
+                                   "8e-3; NaN: not recorded)"})
     dbc = {db: database_coordinates(forms[db][1]) for db in dbs}
     coords = {
         "database": ("database", np.array(dbs, dtype=object), {"long_name": "form database (Table 3-1)"}),

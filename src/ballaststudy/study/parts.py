@@ -27,7 +27,9 @@ from .timing import of_databases, read_time_log
 PART_STUDY = "study.nc"
 PART_RECORDS = "records.json"       # the part's provenance records: a JSON list
 PART_README = "README.md"
-_FILLS = {"cycles_run": 0, "assembly_stages_at_limit": -1}    # per (database, case): no case there
+# per (database, case): the value where no case is (or a part from before the variable)
+_FILLS = {"cycles_run": np.int32(0), "assembly_stages_at_limit": np.int32(-1),
+          "assembly_force_ratio": np.float64(np.nan)}
 
 
 def pack_part(results_dir, out_dir, time_logs=(), command=None):
@@ -56,7 +58,7 @@ def kept_study(study):
     """The part's study as kept: the behaviours the study stages read and the per-case
     counts; the rig's other per-cycle records (a third of the size: force bounds, plate
     position, steps) stay in each case's metrics.nc."""
-    names = [*BEHAVIOURS, *_FILLS]
+    names = [n for n in (*BEHAVIOURS, *_FILLS) if n in study]
     dropped = sorted(n for n in study.data_vars if n not in names)
     kept = study[names].copy()
     kept.attrs = dict(study.attrs, kept_by_study_pack=(
@@ -164,7 +166,7 @@ def merge_studies(parts):
     variables = _common_variables(parts)
     shape = (len(dbs), len(cases), len(cycles))
     data = {n: np.full(shape, np.nan) for n in variables}
-    per_case = {n: np.full(shape[:2], fill, dtype=np.int32) for n, fill in _FILLS.items()}
+    per_case = {n: np.full(shape[:2], fill) for n, fill in _FILLS.items()}
     owner, coord_of = {}, {}
     for path, ds in parts:
         k = np.searchsorted(cycles, ds.cycle.values)
@@ -184,11 +186,13 @@ def merge_studies(parts):
                 for n in variables:
                     data[n][I, J, k] = ds[n].values[i, j]
                 for n in _FILLS:
-                    per_case[n][I, J] = ds[n].values[i, j]
+                    if n in ds:
+                        per_case[n][I, J] = ds[n].values[i, j]
     first = parts[0][1]
     dims = ("database", "case", "cycle")
     out = {n: (dims, data[n], variables[n]) for n in variables}
-    out.update({n: (("database", "case"), per_case[n], dict(first[n].attrs)) for n in _FILLS})
+    attrs_of = {n: dict(ds[n].attrs) for _, ds in reversed(parts) for n in _FILLS if n in ds}
+    out.update({n: (("database", "case"), per_case[n], attrs_of[n]) for n in _FILLS if n in attrs_of})
     coords = {"database": ("database", np.array(dbs, dtype=object), dict(first.database.attrs)),
               "case": ("case", np.array(cases, dtype=first.case.dtype), dict(first.case.attrs)),
               "cycle": ("cycle", cycles, dict(first.cycle.attrs))}

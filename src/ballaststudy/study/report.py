@@ -9,6 +9,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ..atomic import atomic_path
+from ..rig.deposition import EQUILIBRIUM_FORCE_RATIO
 from . import optimise, plots, scale
 
 
@@ -125,6 +126,12 @@ def extent_line(study):
             text += (f" {int((limits > 0).sum())} of {int((limits >= 0).sum())} cases were assembled "
                      "with a stage stopped at its step limit, not at its criterion (study.nc: "
                      "assembly_stages_at_limit; each case's assembled.nc names the stages).")
+    if "assembly_force_ratio" in study and np.isfinite(study["assembly_force_ratio"].values).any():
+        ratio = study["assembly_force_ratio"].values
+        ratio = ratio[np.isfinite(ratio)]
+        text += (f" The stones' force ratio when loading began: median {np.median(ratio):.2g}, largest "
+                 f"{ratio.max():.2g}; {int((ratio >= EQUILIBRIUM_FORCE_RATIO).sum())} of {ratio.size} cases at or above "
+                 f"the thesis' equilibrium limit {EQUILIBRIUM_FORCE_RATIO:g} (4.2.1; study.nc: assembly_force_ratio).")
     return text
 
 
