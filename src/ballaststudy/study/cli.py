@@ -1,4 +1,4 @@
-"""`ballaststudy study ...`: aggregate, iri, optimise, record, pack, merge. `register(subparsers)` adds the stage to
+"""`ballaststudy study ...`: aggregate, iri, optimise, record, pack, merge, differences. `register(subparsers)` adds the stage to
 the main parser (ballaststudy.cli). Bad input raises ConfigError (file, key, allowed range),
 which the main command prints as one line with exit code 2; no partial outputs are left."""
 
@@ -8,6 +8,7 @@ from ..config import ConfigError
 from ..provenance import Recorder
 from ..inputs import open_netcdf, writable_dir, writable_file
 from .aggregate import BEHAVIOURS, aggregate, identify_metrics
+from .differences import write_differences
 from .iri import write_iri
 from .parts import merge_parts, pack_part
 from .record import write_record
@@ -28,6 +29,26 @@ def _groups(items):
             raise ConfigError("command line", "--group", f"{item!r} is not DATABASE=GROUP")
         out[db] = group
     return out
+
+
+def _levels(items):
+    """{level: part folder} from LEVEL=PART items, in their order."""
+    out = {}
+    for item in items:
+        level, sep, part = item.partition("=")
+        if not sep or not level or not part:
+            raise ConfigError("command line", "LEVEL=PART", f"{item!r} is not LEVEL=PART")
+        if level in out:
+            raise ConfigError("command line", "LEVEL=PART", f"level {level!r} given twice")
+        out[level] = Path(part)
+    return out
+
+
+def _study_differences(args):
+    writable_dir(args.out)
+    command = " ".join(["ballaststudy study differences", *args.levels, "--out", str(args.out)])
+    for path in write_differences(_levels(args.levels), args.out, command, args.resamples, args.seed):
+        print(f"wrote {path}")
 
 
 def _study_aggregate(args):
@@ -148,4 +169,13 @@ def register(subparsers):
     m.add_argument("parts", nargs="+", type=Path, metavar="PART", help="part folders written by study pack")
     m.add_argument("--out", required=True, type=Path, help="results folder for the iri, optimise and record stages")
     m.set_defaults(func=_study_merge)
+
+    d = ss.add_parser("differences", help="the screening of the thesis' headline contrasts, one study part per "
+                                          "level (docs/thesis-scale/differences.md)")
+    d.add_argument("levels", nargs="+", metavar="LEVEL=PART",
+                   help="a level's name and its part folder (study pack), e.g. ours=docs/thesis-scale/differences/ours")
+    d.add_argument("--out", required=True, type=Path, help="output folder, e.g. docs/thesis-scale")
+    d.add_argument("--resamples", type=integer(100, 100_000), default=2000, help="bootstrap resamples (>= 100)")
+    d.add_argument("--seed", type=SEED, default=0, help="bootstrap seed")
+    d.set_defaults(func=_study_differences)
     return st

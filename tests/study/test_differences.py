@@ -1,0 +1,113 @@
+"""The screening of the thesis' headline (study/differences.py) on planted levels: a level
+with a planted jump of G_1-1 over G_1-2 is read as holding, one without (the negative
+control) as not; the differences, intervals and core-hours are the planted ones."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from ballaststudy.cli import main
+from ballaststudy.config import load_config
+from ballaststudy.study.differences import CONTRASTS, REFERENCE, screening_table, write_differences
+from ballaststudy.study.optimise import JUMP_FACTOR
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _part(folder, study, fine_m, neighbour_m, seconds):
+    """A part folder: ``study`` with G_1-1's and G_1-2's final settlements planted around
+    fine_m and neighbour_m (sd 5 %), and two jobs of ``seconds`` each in its records."""
+    s = study.copy(deep=True)
+    rng = np.random.default_rng(1)
+    dbs = [str(d) for d in s.database.values]
+    for db, level in (("G_1-1", fine_m), ("G_1-2", neighbour_m)):
+        finals = level * (1 + 0.05 * rng.standard_normal(s.sizes["case"]))
+        s["settlement"][dbs.index(db)] = np.linspace(0, 1, s.sizes["cycle"])[None, :] * finals[:, None]
+    folder.mkdir()
+    s.to_netcdf(folder / "study.nc")
+    jobs = [{"output": [f"cases/G_1-1/case{k}/metrics.nc"], "step": "case run", "inputs": {str(k): ""},
+             "started": "2026-12-07T00:00:00+00:00", "finished": f"2026-12-07T00:{seconds // 60:02d}:00+00:00"}
+            for k in range(2)]
+    (folder / "records.json").write_text(json.dumps(jobs))
+    return folder, s
+
+
+@pytest.fixture(scope="module")
+def levels(thesis_study, tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("differences")
+    _, study = thesis_study
+    jump, jump_study = _part(tmp / "jump", study, 0.030, 0.002, 1800)
+    flat, flat_study = _part(tmp / "flat", study, 0.002, 0.002, 1800)
+    return {"jump": jump, "flat": flat}, {"jump": jump_study, "flat": flat_study}
+
+
+def test_a_planted_jump_holds_and_its_absence_does_not(levels):
+    parts, studies = levels
+    table = screening_table(parts, n_boot=500, seed=0)
+    g1 = table[table.contrast == "S(G_1-1) - S(G_1-2)"].set_index("level")
+    for level, study in studies.items():
+        finals = study.settlement.sel(database=["G_1-1", "G_1-2"]).values[:, :, -1].mean(axis=1)
+        row = g1.loc[level]
+        assert row.difference_m == pytest.approx(finals[0] - finals[1], rel=1e-12)
+        assert row.difference_lo_m <= row.difference_m <= row.difference_hi_m
+    assert g1.loc["jump", "mark"] == "holds"
+    assert g1.loc["jump", "difference_lo_m"] > 0.02
+    assert g1.loc["flat", "mark"] == "does not hold"          # S - 1.5 S < 0: no jump
+    assert g1.loc["flat", "jump_hi_m"] < 0 < g1.loc["flat", "difference_hi_m"]
+    assert JUMP_FACTOR > 1
+    assert table.core_hours.tolist() == pytest.approx([1.0] * len(table))     # two jobs of 30 min
+    assert (table.cases == studies["jump"].cycles_run.values.astype(bool).sum()).all()
+
+
+def test_the_record_is_written_by_the_command(levels, tmp_path):
+    parts, _ = levels
+    args = [f"{k}={v}" for k, v in parts.items()]
+    assert main(["study", "differences", *args, "--out", str(tmp_path), "--resamples", "200"]) == 0
+    md = (tmp_path / "differences.md").read_text()
+    assert "- S(G_1-1) - S(G_1-2): the jump holds under jump." in md
+    assert f"ballaststudy study differences {args[0]} {args[1]} --out {tmp_path}" in md
+    assert (tmp_path / "differences.png").stat().st_size > 0
+    table = pd.read_csv(tmp_path / "differences.csv")
+    assert set(table.level) == {"jump", "flat"} and len(table) == 4
+    again = tmp_path / "again"
+    write_differences(parts, again, "x", n_boot=200, seed=0)
+    assert (again / "differences.csv").read_text() == (tmp_path / "differences.csv").read_text()
+
+
+@pytest.mark.parametrize("args, says", [(["jump"], "is not LEVEL=PART"), (["a=x", "a=y"], "given twice"),
+                                        (["a=/nonexistent"], "expected a part's study.nc")])
+def test_bad_levels_are_one_line(tmp_path, capsys, args, says):
+    assert main(["study", "differences", *args, "--out", str(tmp_path / "o")]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and says in line, line
+    assert not (tmp_path / "o" / "differences.md").exists()
+
+
+def _merged(base, *overlays):
+    """Snakemake's --configfile A B ...: later files update earlier ones key by key."""
+    def update(a, b):
+        for k, v in b.items():
+            a[k] = update(dict(a.get(k) or {}), v) if isinstance(v, dict) else v
+        return a
+    cfg = yaml.safe_load(base.read_text())
+    for o in overlays:
+        cfg = update(cfg, yaml.safe_load(o.read_text()))
+    return cfg
+
+
+@pytest.mark.parametrize("level", sorted(p.stem for p in (ROOT / "config/differences").glob("*.yaml")
+                                          if p.stem != "screening"))
+def test_every_level_is_a_valid_config_with_its_own_results(level, tmp_path):
+    """Each level's overlay on config/thesis.yaml and the screening's is a config the
+    workflow accepts, writing to a folder of its own."""
+    cfg = _merged(ROOT / "config/thesis.yaml", ROOT / "config/differences/screening.yaml",
+                  ROOT / f"config/differences/{level}.yaml")
+    cfg["databases_file"] = str(ROOT / cfg["databases_file"])
+    path = tmp_path / "merged.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    load_config(path)
+    assert cfg["results_dir"] == f"results/differences/{level}"
+    assert set(cfg["databases"]) == {d for pair in CONTRASTS for d in pair} | {REFERENCE}
