@@ -113,6 +113,28 @@ def test_settling_stages_record_their_end(assembled):
     assert 0 <= lay.stage_end["relax"]["force_ratio"] < 1
 
 
+def test_tamping_against_the_held_plate(small_library, small_params, assembled):
+    """The thesis' order (4.2.2 c): cut at the depth and the plate held there before the
+    tamping, the stones pushed up against it; the plate is not lowered onto the settled
+    stones but released onto them in the relaxation. No stone ball reaches above its
+    bottom under it; the specimen is another than the default order's."""
+    from dataclasses import replace
+
+    from ballaststudy.rig.assembly import assemble
+    from ballaststudy.rig.library import load_library
+    p = replace(small_params, tamping_against_plate=True)
+    rig = assemble(load_library(small_library), p, seed=7)
+    b, lay = rig.sim.balls, rig.layout
+    bottom = (b.pos[lay.plate_balls, 1] - b.rad[lay.plate_balls]).min()
+    assert lay.stage_steps["plate"] == 0 and bottom < p.depth_m
+    ids = rig.stone_balls()
+    under = np.abs(b.pos[ids, 0]) < 0.5 * p.plate_width_m
+    assert (b.pos[ids[under], 1] - b.rad[ids[under]] < bottom).all()
+    assert not lay.stages_at_limit
+    default = assembled[1]
+    assert len(ids) != len(default.stone_balls()) or not np.allclose(b.pos[ids], default.sim.balls.pos[ids])
+
+
 def test_static_force_balance(assembled, small_params):
     """At the end of static loading (30 kN reached), the loading ball held still: loading
     force + weight of the stones and the plate = bottom + side-wall vertical forces + the

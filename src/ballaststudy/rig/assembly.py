@@ -69,17 +69,29 @@ def build_tall(lib, params, seed, contact_damping=None):
 def tamp(rig, progress=None):
     """Stage c: tamping-like compaction and the plate. Every stone gets a centripetal
     velocity towards the axis x = 0 (rigidly, so bonds are not torn), ``tamping_pulses``
-    times, under ``tamping_gravity``; then balls reaching above the ballast depth are
-    deleted and the pressing plate is created as a held clump at the depth.
-    (The thesis deletes before tamping against the held plate; compacting first makes the
-    remaining layer as deep as the test's 18 cm instead of settling below it.)"""
-    p, sim, lay = rig.params, rig.sim, rig.layout
+    times, under ``tamping_gravity``; balls reaching above the ballast depth are deleted
+    and the pressing plate is created as a held clump at the depth: after the tamping by
+    default (compacting first makes the remaining layer as deep as the test's 18 cm
+    instead of settling below it), before it with ``tamping_against_plate`` (the thesis'
+    order: the stones "rush against" the held plate, 4.2.2 c)."""
+    p, lay = rig.params, rig.layout
+    if p.tamping_against_plate:
+        place_plate(rig)
     done = ramp_gravity(rig, p.drop_gravity_m_s2, p.tamping_gravity_m_s2, p.gravity_ramp_steps,
                         progress)
     done += centripetal_pulses(rig, p.tamping_velocity_m_s, p.tamping_pulses, p.tamping_steps,
                                0.5 * p.width_m * p.tall_width_factor,
                                len(lay.stone_library_index), progress)
     done += settle(rig, p, "settle after tamping", progress)
+    if not p.tamping_against_plate:
+        place_plate(rig)
+    return done
+
+
+def place_plate(rig):
+    """Balls reaching above the ballast depth deleted (and the debris that makes), the
+    pressing plate created at the depth as a held clump."""
+    p, sim, lay = rig.params, rig.sim, rig.layout
     b = sim.balls
     ids = rig.stone_balls()
     sim.delete_balls(ids[b.pos[ids, 1] + b.rad[ids] > p.depth_m])
@@ -97,7 +109,6 @@ def tamp(rig, progress=None):
                                   material_id=STEEL, mass=m, inertia=inertia))
     lay.plate_balls = list(range(n0, len(sim.balls)))
     sim.set_clump_velocity(lay.plate, vel=(0.0, 0.0), omega=0.0, held=True)
-    return done
 
 
 def move_side_walls(rig, progress=None):
@@ -219,7 +230,9 @@ def assemble(lib, params, seed, progress=None):
     st["tamping"] = tamp(rig, progress)
     deposition_conditions(rig, params, mu, on=False)
     st["reset"] = move_side_walls(rig, progress)
-    st["plate"] = settle_plate(rig, progress)
+    # the thesis' order leaves the plate where the tamping held it, at the depth: it meets the
+    # settled stones when released (its "void under the plate", 4.3)
+    st["plate"] = 0 if params.tamping_against_plate else settle_plate(rig, progress)
     add_loading_ball(rig)
     st["relax"] = relax(rig, progress)
     rig.layout.stage_end["relax"] = {"steps": st["relax"], "force_ratio": stone_force_ratio(rig)}

@@ -32,6 +32,7 @@ class RigParams(DepositionParams):
     tamping_gravity_m_s2: float = 1000.0
     tamping_pulses: int = 4
     tamping_steps: int = 20000
+    tamping_against_plate: bool = False   # True: the thesis' order (4.2.2 c), see assembly.tamp
     wall_speed_m_s: float = 5.0
     plate_approach_gap_m: float = 2.0e-4
     plate_settle_velocity_m_s: float = 0.01
