@@ -15,6 +15,7 @@ def part_of(study, keep):
     ds["cycles_run"] = xr.where(keep, ds.cycles_run, 0).astype(np.int32)
     ds["assembly_stages_at_limit"] = xr.where(keep, ds.assembly_stages_at_limit, -1).astype(np.int32)
     ds["assembly_force_ratio"] = xr.where(keep, ds.assembly_force_ratio, np.nan)
+    ds["seating"] = xr.where(keep, ds.seating, np.nan)
     return ds.isel(database=np.flatnonzero(keep.values.any(axis=1)))
 
 

@@ -121,6 +121,20 @@ def test_force_ratio_when_loading_began_is_kept_and_reported(tmp_path, synth, in
     assert "largest 0.02; 1 of 2 cases at or above the thesis' equilibrium limit 0.008" in extent_line(ds)
 
 
+def test_the_seating_before_cycle_0_is_kept(tmp_path, synth, inputs):
+    """The loading ball's descent from its first sample (static pre-loading) to cycle 0's
+    settlement force; NaN for a file without the time series."""
+    metrics, forms = inputs
+    with xr.open_dataset(metrics[("G_1-1", 0)]) as f:
+        ds = f.load()
+    ds["y_at_level"] = ("cycle", 0.249 - 1e-5 * np.arange(ds.sizes["cycle"]), {"units": "m"})
+    ds["sample_y"] = ("sample", np.array([0.2513, 0.2502, 0.249]), {"units": "m"})
+    ds.to_netcdf(metrics[("G_1-1", 0)])
+    ds = xr.open_dataset(aggregate(metrics, forms, tmp_path / "study.nc")).load()
+    assert float(ds.seating.sel(database="G_1-1", case=0)) == pytest.approx(2.3e-3, rel=1e-9)
+    assert np.isnan(ds.seating.sel(database="G_1-1", case=1))
+
+
 def test_units_are_converted(tmp_path, synth, inputs):
     metrics, forms = inputs
     p = tmp_path / "mm.nc"

@@ -17,10 +17,12 @@ from ballaststudy.study.optimise import JUMP_FACTOR
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _part(folder, study, fine_m, neighbour_m, seconds):
+def _part(folder, study, fine_m, neighbour_m, seconds, seating_m=np.nan):
     """A part folder: ``study`` with G_1-1's and G_1-2's final settlements planted around
-    fine_m and neighbour_m (sd 5 %), and two jobs of ``seconds`` each in its records."""
+    fine_m and neighbour_m (sd 5 %), every case's seating ``seating_m``, and two jobs of
+    ``seconds`` each in its records."""
     s = study.copy(deep=True)
+    s["seating"] = s.seating.copy(data=np.full(s.seating.shape, seating_m))
     rng = np.random.default_rng(1)
     dbs = [str(d) for d in s.database.values]
     for db, level in (("G_1-1", fine_m), ("G_1-2", neighbour_m)):
@@ -40,14 +42,14 @@ def levels(thesis_study, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("differences")
     _, study = thesis_study
     jump, jump_study = _part(tmp / "jump", study, 0.030, 0.002, 1800)
-    flat, flat_study = _part(tmp / "flat", study, 0.002, 0.002, 1800)
+    flat, flat_study = _part(tmp / "flat", study, 0.002, 0.002, 1800, seating_m=0.004)
     return {"jump": jump, "flat": flat}, {"jump": jump_study, "flat": flat_study}
 
 
 def test_a_planted_jump_holds_and_its_absence_does_not(levels):
     parts, studies = levels
     table = screening_table(parts, n_boot=500, seed=0)
-    g1 = table[table.contrast == "S(G_1-1) - S(G_1-2)"].set_index("level")
+    g1 = table[(table.contrast == "S(G_1-1) - S(G_1-2)") & (table.settlement == "from cycle 0")].set_index("level")
     for level, study in studies.items():
         finals = study.settlement.sel(database=["G_1-1", "G_1-2"]).values[:, :, -1].mean(axis=1)
         row = g1.loc[level]
@@ -58,6 +60,12 @@ def test_a_planted_jump_holds_and_its_absence_does_not(levels):
     assert g1.loc["flat", "mark"] == "does not hold"          # S - 1.5 S < 0: no jump
     assert g1.loc["flat", "jump_hi_m"] < 0 < g1.loc["flat", "difference_hi_m"]
     assert JUMP_FACTOR > 1
+    # with the seating (flat: 4 mm every case): S shifts by it, the difference does not, and
+    # the jump's statistic S - 1.5 S moves by -0.5 x 4 mm; no seating recorded: no such rows
+    seated = table[(table.contrast == "S(G_1-1) - S(G_1-2)") & (table.settlement == "with the seating")]
+    assert seated.level.tolist() == ["flat"]
+    assert seated.S_fine_m.iloc[0] == pytest.approx(g1.loc["flat", "S_fine_m"] + 0.004)
+    assert seated.difference_m.iloc[0] == pytest.approx(g1.loc["flat", "difference_m"])
     assert table.core_hours.tolist() == pytest.approx([1.0] * len(table))     # two jobs of 30 min
     assert (table.cases == studies["jump"].cycles_run.values.astype(bool).sum()).all()
 
@@ -67,11 +75,12 @@ def test_the_record_is_written_by_the_command(levels, tmp_path):
     args = [f"{k}={v}" for k, v in parts.items()]
     assert main(["study", "differences", *args, "--out", str(tmp_path), "--resamples", "200"]) == 0
     md = (tmp_path / "differences.md").read_text()
-    assert "- S(G_1-1) - S(G_1-2): the jump holds under jump." in md
+    assert "- S(G_1-1) - S(G_1-2), settlement from cycle 0: the jump holds under jump." in md
+    assert "- S(G_1-1) - S(G_1-2), settlement with the seating: the jump holds under none" in md
     assert f"ballaststudy study differences {args[0]} {args[1]} --out {tmp_path}" in md
     assert (tmp_path / "differences.png").stat().st_size > 0
     table = pd.read_csv(tmp_path / "differences.csv")
-    assert set(table.level) == {"jump", "flat"} and len(table) == 4
+    assert set(table.level) == {"jump", "flat"} and len(table) == 6
     again = tmp_path / "again"
     write_differences(parts, again, "x", n_boot=200, seed=0)
     assert (again / "differences.csv").read_text() == (tmp_path / "differences.csv").read_text()

@@ -111,6 +111,15 @@ def _stages_at_limit(ds):
     return len(layout["stages_at_limit"]) if "stages_at_limit" in layout else -1
 
 
+def _seating(ds):
+    """The loading ball's descent from the start of the static pre-loading (its first
+    sample) to the settlement force in cycle 0: what the settlement, counted from cycle 0,
+    leaves out; NaN where the file lacks either."""
+    if "sample_y" not in ds or "y_at_level" not in ds or not ds.sizes.get("sample") or not ds.sizes.get("cycle"):
+        return np.nan
+    return float(ds["sample_y"].values[0] - ds["y_at_level"].values[0])
+
+
 def _force_ratio_at_start(ds):
     """The stones' force ratio when the case's loading began (its rig layout); NaN where the
     file does not record it."""
@@ -174,10 +183,12 @@ def build_study(metrics, forms, groups=None):
     run = np.zeros(shape[:2], dtype=np.int32)
     at_limit = np.full(shape[:2], -1, dtype=np.int32)
     force_ratio = np.full(shape[:2], np.nan)
+    seating = np.full(shape[:2], np.nan)
     for (db, case), (cyc, vals, extra) in series.items():
         i, j = dbs.index(db), cases.index(case if not isinstance(cases[0], str) else str(case))
         at_limit[i, j] = _stages_at_limit(metrics[(db, case)][1])
         force_ratio[i, j] = _force_ratio_at_start(metrics[(db, case)][1])
+        seating[i, j] = _seating(metrics[(db, case)][1])
         k = np.searchsorted(cycles, cyc)
         for n in BEHAVIOURS:
             arrays[n][i, j, k] = vals[n]
@@ -198,6 +209,10 @@ def build_study(metrics, forms, groups=None):
         "units": "1", "long_name": "the stones' force ratio when loading began: mean |unbalanced force| / mean "
                                    "sum of force magnitudes, PFC's equilibrium measure (thesis 4.2.1: at rest below "
                                    "8e-3; NaN: not recorded)"})
+    data["seating"] = (("database", "case"), seating, {
+        "units": "m", "long_name": "downward displacement of the loading ball from the start of the static "
+                                   "pre-loading to the settlement force in cycle 0: the seating the settlement leaves "
+                                   "out (thesis 4.5.1 reads the pressing ball's displacement; NaN: not recorded)"})
     dbc = {db: database_coordinates(forms[db][1]) for db in dbs}
     coords = {
         "database": ("database", np.array(dbs, dtype=object), {"long_name": "form database (Table 3-1)"}),

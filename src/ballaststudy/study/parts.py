@@ -29,7 +29,7 @@ PART_RECORDS = "records.json"       # the part's provenance records: a JSON list
 PART_README = "README.md"
 # per (database, case): the value where no case is (or a part from before the variable)
 _FILLS = {"cycles_run": np.int32(0), "assembly_stages_at_limit": np.int32(-1),
-          "assembly_force_ratio": np.float64(np.nan)}
+          "assembly_force_ratio": np.float64(np.nan), "seating": np.float64(np.nan)}
 
 
 def pack_part(results_dir, out_dir, time_logs=(), command=None):
