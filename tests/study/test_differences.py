@@ -86,6 +86,16 @@ def test_the_record_is_written_by_the_command(levels, tmp_path):
     assert (again / "differences.csv").read_text() == (tmp_path / "differences.csv").read_text()
 
 
+def test_a_longer_run_is_read_at_the_screenings_cycle(levels):
+    """--at-cycle: each case at that cycle (the planted curves rise linearly to the last)."""
+    parts, studies = levels
+    n = studies["jump"].sizes["cycle"]
+    table = screening_table({"jump": parts["jump"]}, n_boot=200, seed=0, at_cycle=n // 2 - 1)
+    row = table[(table.contrast == "S(G_1-1) - S(G_1-2)") & (table.settlement == "from cycle 0")].iloc[0]
+    s = studies["jump"].settlement.sel(database="G_1-1").values[:, n // 2 - 1].mean()
+    assert row.S_fine_m == pytest.approx(s) and row.cycles == n // 2
+
+
 @pytest.mark.parametrize("args, says", [(["jump"], "is not LEVEL=PART"), (["a=x", "a=y"], "given twice"),
                                         (["a=/nonexistent"], "expected a part's study.nc")])
 def test_bad_levels_are_one_line(tmp_path, capsys, args, says):

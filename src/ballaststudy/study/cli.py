@@ -46,8 +46,10 @@ def _levels(items):
 
 def _study_differences(args):
     writable_dir(args.out)
-    command = " ".join(["ballaststudy study differences", *args.levels, "--out", str(args.out)])
-    for path in write_differences(_levels(args.levels), args.out, command, args.resamples, args.seed):
+    command = " ".join(["ballaststudy study differences", *args.levels, "--out", str(args.out),
+                        *([f"--at-cycle {args.at_cycle}"] if args.at_cycle is not None else [])])
+    for path in write_differences(_levels(args.levels), args.out, command, args.resamples, args.seed,
+                                  args.at_cycle):
         print(f"wrote {path}")
 
 
@@ -177,5 +179,8 @@ def register(subparsers):
     d.add_argument("--out", required=True, type=Path, help="output folder, e.g. docs/thesis-scale")
     d.add_argument("--resamples", type=integer(100, 100_000), default=2000, help="bootstrap resamples (>= 100)")
     d.add_argument("--seed", type=SEED, default=0, help="bootstrap seed")
+    d.add_argument("--at-cycle", type=integer(0, 10**9), default=None,
+                   help="read every case at this cycle where it ran longer (default: its last), e.g. 299 to read "
+                        "the 1000-cycle thesis-scale study beside the 300-cycle screening")
     d.set_defaults(func=_study_differences)
     return st

@@ -109,11 +109,22 @@ def read_level(part_dir):
     return study, load_part_records(part / PART_RECORDS)
 
 
-def screening_table(levels, n_boot=2000, seed=0):
-    """One row per (level, contrast) from {level: part folder}."""
+def cut_at(study, cycle):
+    """The study as if its cases had stopped after ``cycle`` (a longer run read at the
+    screening's length, e.g. the thesis-scale study at 300 cycles)."""
+    cut = study.sel(cycle=study.cycle <= cycle)
+    cut["cycles_run"] = np.minimum(study.cycles_run, cycle + 1).astype(study.cycles_run.dtype)
+    return cut
+
+
+def screening_table(levels, n_boot=2000, seed=0, at_cycle=None):
+    """One row per (level, settlement, contrast) from {level: part folder}; each case read
+    at its last cycle, or at ``at_cycle`` where it ran longer."""
     rows = []
     for level, part in levels.items():
         study, records = read_level(part)
+        if at_cycle is not None:
+            study = cut_at(study, at_cycle)
         state = {**state_row(study), "core_hours": core_hours(records)}
         for what, settlement in settlements(study).items():
             for c in contrast_rows(study, settlement, n_boot, seed):
@@ -177,11 +188,11 @@ def figure(table, path):
     return path
 
 
-def write_differences(levels, out_dir, command, n_boot=2000, seed=0):
+def write_differences(levels, out_dir, command, n_boot=2000, seed=0, at_cycle=None):
     """differences.csv, differences.md and differences.png in ``out_dir``; returns the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    table = screening_table(levels, n_boot, seed)
+    table = screening_table(levels, n_boot, seed, at_cycle)
     with atomic_path(out / "differences.csv") as tmp:
         table.to_csv(tmp, index=False)
     with atomic_path(out / "differences.md") as tmp:
