@@ -1,4 +1,4 @@
-"""Why the thesis' headline does or does not reproduce, by experiment (issue 73): a screening
+"""Why the thesis' headline does or does not reproduce, by experiment: a screening
 of the settings where our set-up departs from the thesis' text, one level per study part
 (config/differences/<level>.yaml), read on the two contrasts that carry the fines jump.
 
