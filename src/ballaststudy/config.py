@@ -4,7 +4,11 @@ allowed range in one line."""
 
 import copy
 from dataclasses import fields
+from pathlib import Path
 
+import yaml
+
+from .atomic import atomic_path
 from .forms.objective import FormParams, ObjectiveError, build_objective
 from .rig.biaxial import BiaxialParams
 from .rig.deposition import ROLLING_COEFFICIENTS
@@ -12,6 +16,19 @@ from .rig.params import RigParams
 from .schema import ConfigError, fill_defaults, load_schema, load_yaml, schema_path, validate  # noqa: F401 (re-exported)
 from .seeds import job_seed  # noqa: F401 (re-exported: the workflow's rules take it from here)
 
+
+
+def jobs_config_file(cfg, path, write=True):
+    """Where the workflow's jobs read their config when it comes from several files
+    (--configfile A B ...) or with --config KEY=VALUE: ``cfg``, the config Snakemake made of
+    them, written to ``path`` (only when it differs from what the file holds) - a job reads
+    one file. Returns ``path``."""
+    text = yaml.safe_dump(cfg, sort_keys=False)
+    path = Path(path)
+    if write and (not path.is_file() or path.read_text() != text):
+        with atomic_path(path) as tmp:
+            tmp.write_text(text)
+    return str(path)
 
 
 def load_config(path):

@@ -10,6 +10,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
+import xarray as xr
 import yaml
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -131,6 +132,29 @@ def _edited(path, change):
         yield
     finally:
         path.write_text(original)
+
+
+def test_jobs_read_the_config_several_files_and_overrides_make(study):
+    """A level's overlay on a study's config (--configfile A B) and --config KEY=VALUE reach
+    the jobs, which read one file: the config Snakemake made of them, written into
+    results_dir when the jobs start (a dry run writes nothing)."""
+    import json
+
+    from ballaststudy.config import database_seed, form_params, load_databases
+    (study / "overlay.yaml").write_text("results_dir: overlaid\nforms: {n_vertices: 24}\n")
+    target = "overlaid/forms/G_1-5.nc"
+    _snakemake(study, "-n", target, "--configfile", "config/config.yaml", "overlay.yaml")
+    assert not (study / "overlaid").exists()
+    _snakemake(study, target, "--configfile", "config/config.yaml", "overlay.yaml")
+    jobs = yaml.safe_load((study / "overlaid" / "config.yaml").read_text())
+    assert jobs["forms"]["n_vertices"] == 24 and jobs["study"]["cases_per_database"] == 1
+    with xr.open_dataset(study / target) as ds:
+        assert json.loads(ds.attrs["form_params"])["n_vertices"] == 24
+    _snakemake(study, "seeded/forms/G_1-5.nc", "--config", "seed=11", "results_dir=seeded")
+    cfg = yaml.safe_load((study / "config" / "config.yaml").read_text())
+    definition = load_databases(study / "config" / "databases.yaml", form_params(cfg))["G_1-5"]
+    with xr.open_dataset(study / "seeded" / "forms" / "G_1-5.nc") as ds:
+        assert int(ds.attrs["seed"]) == database_seed(11, "G_1-5", definition)
 
 
 def test_editing_one_database_reruns_only_it(study):
