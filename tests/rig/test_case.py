@@ -6,7 +6,6 @@ import pytest
 import xarray as xr
 
 from ballaststudy.dem import Simulation
-from ballaststudy.rig.assembly import plate_clearance
 from ballaststudy.rig.box import BoxRig
 from ballaststudy.rig.deposition import stone_force_ratio
 from ballaststudy.rig.loading import CYCLE_FIELDS, LoadingRun
@@ -112,23 +111,6 @@ def test_settling_stages_record_their_end(assembled):
         end = lay.stage_end[stage]
         assert end["steps"] > 0 and end["speed_m_s"] < 0.01 and 0 <= end["force_ratio"] < 1
     assert 0 <= lay.stage_end["relax"]["force_ratio"] < 1
-
-
-def test_plate_clearance_is_the_first_touch_moving_down():
-    """Two pebbles (r 0.01 at x 0 and 0.01, y 0.2) over balls of r 0.005: one right below
-    the first (touch after (0.2 - 0.1) - 0.015), one 0.009 beside it (sqrt(0.015^2 -
-    0.009^2) = 0.012 of the 0.015 left: 0.1 - 0.012); a ball beside the plate beyond reach
-    (dx 0.02 from the last pebble) is passed, however high it lies."""
-    sim = Simulation()
-    sim.add_balls([0.0, 0.01], [0.2, 0.2], [0.01, 0.01], 7850.0)
-    sim.add_balls([0.0], [0.1], [0.005], 2650.0, stone_id=0)
-    assert plate_clearance(sim, [0, 1], [2]) == pytest.approx(0.1 - 0.015)
-    sim.add_balls([-0.009], [0.1 + 1e-3], [0.005], 2650.0, stone_id=1)
-    assert plate_clearance(sim, [0, 1], [3]) == pytest.approx(0.1 - 1e-3 - 0.012)
-    assert plate_clearance(sim, [0, 1], [2, 3]) == pytest.approx(0.1 - 0.015)      # the first to touch
-    sim.add_balls([0.03], [0.25], [0.005], 2650.0, stone_id=2)
-    assert plate_clearance(sim, [0, 1], [4]) == np.inf
-    assert plate_clearance(sim, [0, 1], [2, 4]) == pytest.approx(0.1 - 0.015)
 
 
 def test_tamping_against_the_held_plate(small_library, small_params, assembled):

@@ -141,39 +141,24 @@ def move_side_walls(rig, progress=None):
     return steps
 
 
-def plate_clearance(sim, plate_balls, ids):
-    """How far the plate can move straight down before one of its pebbles touches one of
-    the balls ``ids``: per pair within reach sideways (|dx| < r_p + r), the pebble touches
-    the ball when its centre is sqrt((r_p + r)^2 - dx^2) above the ball's; balls beside the
-    plate that it passes do not count (inf where none is within reach)."""
-    b = sim.balls
-    pb = np.asarray(plate_balls)
-    dx = b.pos[ids, 0][:, None] - b.pos[pb, 0][None, :]
-    reach = b.rad[ids][:, None] + b.rad[pb][None, :]
-    within = np.abs(dx) < reach
-    if not within.any():
-        return np.inf
-    rise = np.sqrt(np.where(within, reach ** 2 - dx ** 2, 0.0))
-    gap = b.pos[pb, 1][None, :] - b.pos[ids, 1][:, None] - rise
-    return float(gap[within].min())
-
-
 def settle_plate(rig, progress=None):
     """Stage d: lower the held plate onto the stones (the tamped surface may lie below the
-    cut at the ballast depth): fast to within ``plate_approach_gap_m`` of the first stone
-    ball it would touch moving straight down (plate_clearance), then at
-    ``plate_settle_velocity_m_s`` until the stones carry its weight (at most 10000 moves; a
-    plate still not carried is recorded in the layout's ``stages_at_limit``). Returns the
-    steps run."""
+    cut at the ballast depth): fast to within ``plate_approach_gap_m`` of the highest
+    stone ball under it (geometric gap), then at ``plate_settle_velocity_m_s`` until the
+    stones carry its weight (at most 10000 moves; a plate still not carried is recorded in
+    the layout's ``stages_at_limit``). Returns the steps run."""
     p, sim, lay = rig.params, rig.sim, rig.layout
     c = lay.plate
+    b = sim.balls
     ids = rig.stone_balls()
     m = float(sim.clumps.mass[c])
     steps = 0
-    pb = np.asarray(lay.plate_balls)
     for _ in range(10000):
-        floor = float((sim.balls.pos[pb, 1] - sim.balls.rad[pb]).min())     # the container's bottom: y = 0
-        gap = min(plate_clearance(sim, pb, ids), floor)
+        pb = np.asarray(lay.plate_balls)
+        bottom = (b.pos[pb, 1] - b.rad[pb]).min()
+        under = np.abs(b.pos[ids, 0]) < 0.5 * p.plate_width_m + b.rad[ids]
+        top = (b.pos[ids[under], 1] + b.rad[ids[under]]).max() if under.any() else 0.0
+        gap = bottom - top
         f, _ = sim.clump_force(c)
         carried = f[1] - m * sim.gravity[1]
         if carried >= m * p.gravity_m_s2:      # in contact (its weight at 9.81 m/s^2)
