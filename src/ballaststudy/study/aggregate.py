@@ -21,6 +21,7 @@ from ..atomic import atomic_path
 from ..schema import ConfigError
 from ..forms.validate import validation_row
 from ..inputs import open_netcdf
+from ..rig.deposition import EQUILIBRIUM_FORCE_RATIO
 from ..metrics.output import VARIABLES
 from ..provenance import Recorder
 from ..standards import GRADING_SIEVES_MM
@@ -208,7 +209,7 @@ def build_study(metrics, forms, groups=None):
     data["assembly_force_ratio"] = (("database", "case"), force_ratio, {
         "units": "1", "long_name": "the stones' force ratio when loading began: mean |unbalanced force| / mean "
                                    "sum of force magnitudes, PFC's equilibrium measure (thesis 4.2.1: at rest below "
-                                   "8e-3; NaN: not recorded)"})
+                                   f"{EQUILIBRIUM_FORCE_RATIO:g}; NaN: not recorded)"})
     data["seating"] = (("database", "case"), seating, {
         "units": "m", "long_name": "downward displacement of the loading ball from the start of the static "
                                    "pre-loading to the settlement force in cycle 0: the seating the settlement leaves "

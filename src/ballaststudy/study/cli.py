@@ -21,26 +21,16 @@ def _forms_name(path):
     return str(ds.attrs.get("database", Path(path).name.removesuffix(".nc")))
 
 
-def _groups(items):
+def _pairs(items, argument, form, once=False):
+    """{key: value} from KEY=VALUE items in their order; ``once``: a key given twice is refused."""
     out = {}
     for item in items or ():
-        db, sep, group = item.partition("=")
-        if not sep or not db or not group:
-            raise ConfigError("command line", "--group", f"{item!r} is not DATABASE=GROUP")
-        out[db] = group
-    return out
-
-
-def _levels(items):
-    """{level: part folder} from LEVEL=PART items, in their order."""
-    out = {}
-    for item in items:
-        level, sep, part = item.partition("=")
-        if not sep or not level or not part:
-            raise ConfigError("command line", "LEVEL=PART", f"{item!r} is not LEVEL=PART")
-        if level in out:
-            raise ConfigError("command line", "LEVEL=PART", f"level {level!r} given twice")
-        out[level] = Path(part)
+        key, sep, value = item.partition("=")
+        if not sep or not key or not value:
+            raise ConfigError("command line", argument, f"{item!r} is not {form}")
+        if once and key in out:
+            raise ConfigError("command line", argument, f"{key!r} given twice")
+        out[key] = value
     return out
 
 
@@ -48,7 +38,8 @@ def _study_differences(args):
     writable_dir(args.out)
     command = " ".join(["ballaststudy study differences", *args.levels, "--out", str(args.out),
                         *([f"--at-cycle {args.at_cycle}"] if args.at_cycle is not None else [])])
-    for path in write_differences(_levels(args.levels), args.out, command, args.resamples, args.seed,
+    levels = {k: Path(v) for k, v in _pairs(args.levels, "LEVEL=PART", "LEVEL=PART", once=True).items()}
+    for path in write_differences(levels, args.out, command, args.resamples, args.seed,
                                   args.at_cycle):
         print(f"wrote {path}")
 
@@ -67,7 +58,8 @@ def _study_aggregate(args):
         if name in forms:
             raise ConfigError(p, "database", f"{name} also given by {forms[name]}")
         forms[name] = Path(p)
-    print(f"wrote {aggregate(metrics, forms, args.out, _groups(args.group))}")
+    groups = _pairs(args.group, "--group", "DATABASE=GROUP")
+    print(f"wrote {aggregate(metrics, forms, args.out, groups)}")
 
 
 def _load_study(path):

@@ -30,15 +30,6 @@ LEVEL = 0.90
 REFERENCE_LEVEL = "ours"
 
 
-def _percentile_interval(samples):
-    s = np.asarray(samples, float)
-    s = s[np.isfinite(s)]
-    if not len(s):
-        return float("nan"), float("nan")
-    lo, hi = np.percentile(s, [50 * (1 - LEVEL), 50 * (1 + LEVEL)])
-    return float(lo), float(hi)
-
-
 def _final(study, name):
     """(database, case) final values of a behaviour."""
     return stats.final_value(study[name].values)
@@ -69,8 +60,8 @@ def contrast_rows(study, settlement, n_boot=2000, seed=0):
         i, j = dbs.index(fine), dbs.index(neighbour)
         n = np.isfinite(settlement[[i, j]]).sum(axis=1)
         s_fine, s_neighbour = np.nanmean(settlement[i]), np.nanmean(settlement[j])
-        lo, hi = _percentile_interval(boot[:, i] - boot[:, j])
-        jlo, jhi = _percentile_interval(boot[:, i] - JUMP_FACTOR * boot[:, j])
+        lo, hi = stats.interval(boot[:, i] - boot[:, j], LEVEL)
+        jlo, jhi = stats.interval(boot[:, i] - JUMP_FACTOR * boot[:, j], LEVEL)
         rows.append({**row, "S_fine_m": s_fine, "S_neighbour_m": s_neighbour, "difference_m": s_fine - s_neighbour,
                      "difference_lo_m": lo, "difference_hi_m": hi, "jump_lo_m": jlo, "jump_hi_m": jhi,
                      "mark": three_way(jlo, jhi) if n.min() >= 2 else "not decidable"})

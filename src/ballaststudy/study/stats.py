@@ -174,11 +174,11 @@ def bootstrap_database_means(values, n_boot, rng):
     return out
 
 
-def interval(samples):
-    """Percentile 95 % interval of bootstrap samples (NaNs ignored)."""
+def interval(samples, level=0.95):
+    """Percentile interval of bootstrap samples at ``level`` (NaNs ignored)."""
     s = np.asarray(samples, float)
     s = s[np.isfinite(s)]
     if not len(s):
         return float("nan"), float("nan")
-    lo, hi = np.percentile(s, [2.5, 97.5])
+    lo, hi = np.percentile(s, [50 * (1 - level), 50 * (1 + level)])
     return float(lo), float(hi)
