@@ -45,6 +45,9 @@ ORDERED_PAIRS = (
     ("rig.box.loading", "cyclic_min_kN", "cyclic_max_kN", True),
     ("rig.box.loading", "cyclic_v_min_m_s", "cyclic_v_max_m_s", False),
     ("rig.box.assembly", "plate_width_m", "width_m", False),
+    # a settled pile's surface still moves at about the settle speed: a plate lowered no
+    # faster follows it down and never lands (rig.assembly.settle_plate)
+    ("rig.box.assembly", "settle_speed_m_s", "plate_settle_velocity_m_s", True),
     ("rig.biaxial.loading", "deviator_min_kPa", "deviator_max_kPa", True),
     ("bpm", "radius_min_mm", "radius_max_mm", False),
 )

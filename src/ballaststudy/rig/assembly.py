@@ -146,7 +146,9 @@ def settle_plate(rig, progress=None):
     cut at the ballast depth): fast to within ``plate_approach_gap_m`` of the highest
     stone ball under it (geometric gap), then at ``plate_settle_velocity_m_s`` until the
     stones carry its weight (at most 10000 moves; a plate still not carried is recorded in
-    the layout's ``stages_at_limit``). Returns the steps run."""
+    the layout's ``stages_at_limit``). The slow speed is above ``settle_speed_m_s``
+    (config.ORDERED_PAIRS): a settled pile's surface still moves at about that speed, and a
+    plate no faster follows it down. Returns the steps run."""
     p, sim, lay = rig.params, rig.sim, rig.layout
     c = lay.plate
     b = sim.balls

@@ -35,7 +35,7 @@ class RigParams(DepositionParams):
     tamping_against_plate: bool = False   # True: the thesis' order (4.2.2 c), see assembly.tamp
     wall_speed_m_s: float = 5.0
     plate_approach_gap_m: float = 2.0e-4
-    plate_settle_velocity_m_s: float = 0.01
+    plate_settle_velocity_m_s: float = 0.05
     relax_steps: int = 10000           # 4.2.2 d
     # loading (4.2.3)
     static_loads_kN: list = field(default_factory=lambda: [10.0, 20.0, 30.0])
