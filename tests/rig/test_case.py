@@ -39,20 +39,35 @@ def test_assembly(assembled, small_params):
     assert again.layout.stages_at_limit == lay.stages_at_limit
 
 
+def test_relaxed_until_at_rest(assembled, small_params):
+    """Relaxation runs whole periods of relax_steps (after the gravity ramp) until the
+    stones' force ratio is at most relax_force_ratio, and records where it stopped."""
+    p, rig = small_params, assembled[1]
+    end = rig.layout.stage_end["relax"]
+    assert end["force_ratio"] <= p.relax_force_ratio
+    assert end["force_ratio"] == pytest.approx(stone_force_ratio(rig), rel=1e-12)
+    periods, rest = divmod(end["steps"] - p.gravity_ramp_steps, p.relax_steps)
+    assert rest == 0 and periods >= 1 and end["steps"] == rig.layout.stage_steps["relax"]
+    assert not any(x.startswith("relax") for x in rig.layout.stages_at_limit)
+
+
 def test_stage_stopped_at_its_limit_is_recorded(small_library, small_params, assembled):
     """A settle cut off at settle_max_steps (500 steps: the pile has just landed at
-    1000 m/s^2) is recorded with the speed it still had; the default stages are not."""
+    1000 m/s^2) is recorded with the speed it still had, a relaxation short of its force
+    ratio with the ratio; the default stages are not."""
     from dataclasses import replace
 
     from ballaststudy.rig.assembly import assemble
     from ballaststudy.rig.library import load_library
-    p = replace(small_params, settle_max_steps=500, settle_check_every=500)
+    p = replace(small_params, settle_max_steps=500, settle_check_every=500,
+                relax_force_ratio=1e-9)          # at rest by no pile's measure: one period
     rig = assemble(load_library(small_library), p, seed=7)
     limits = rig.layout.stages_at_limit
-    assert [x.split(":")[0] for x in limits[:2]] == ["settle after the drop",
-                                                      "settle after tamping"]
+    assert [x.split(":")[0] for x in limits] == ["settle after the drop", "settle after tamping",
+                                                 "relax"]
     speed = float(limits[0].split("speed ")[1].split(" m/s")[0])
     assert speed >= p.settle_speed_m_s
+    assert rig.layout.stage_end["relax"]["steps"] == p.gravity_ramp_steps + p.relax_steps
     assert not any(x.startswith("settle") for x in assembled[1].layout.stages_at_limit)
 
 

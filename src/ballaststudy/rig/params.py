@@ -37,6 +37,7 @@ class RigParams(DepositionParams):
     plate_approach_gap_m: float = 2.0e-4
     plate_settle_velocity_m_s: float = 0.05
     relax_steps: int = 10000           # 4.2.2 d
+    relax_force_ratio: float = 8.0e-3   # relaxed in periods of relax_steps until this (4.2.1)
     # loading (4.2.3)
     static_loads_kN: list = field(default_factory=lambda: [10.0, 20.0, 30.0])
     static_window_steps: int = 10000
