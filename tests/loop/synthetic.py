@@ -181,8 +181,7 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
     sets = cfg["specimens"]
     sets[cfg["loop"]["specimens"]]["cases"] = max(cases, sets[cfg["loop"]["specimens"]]["cases"])
     cfg["loop"].update(cases=cases, cycles=cycles, design_sets=design_sets, refine_rounds=refine_rounds,
-                       refine_sets=refine_sets, measurement_sd=1e-5,
-                       posterior_samples=4096, specimen_share=float(specimen_share))
+                       refine_sets=refine_sets, posterior_samples=4096, specimen_share=float(specimen_share))
     (folder / "config.yaml").write_text(yaml.safe_dump(cfg))
     (folder / "base.yaml").write_text(yaml.safe_dump({"parameters": SCENARIO_BASE}))
     specimens = [folder / f"s{k}.nc" for k in range(assemble or cases)]
@@ -194,15 +193,31 @@ def scenario_setup(folder, config_file, cases=3, cycles=24, design_sets=9, speci
     return specimens, folder / "config.yaml", folder / "base.yaml"
 
 
+def declared_sd(measured, noise_share=NOISE_SHARE):
+    """The measurement sd a user who digitised these curves would declare
+    (``loop.measurement_sd``): the digitiser's noise, ``noise_share`` x a curve's final
+    value, at the median of the tests' last measured values."""
+    finals = []
+    for path in measured:
+        with xr.open_dataset(path) as ds:
+            finals.append(abs(float(ds["axial_strain"].values[-1])))
+    return noise_share * float(np.median(finals))
+
+
 def run_loop(folder, out, measured, conditions, specimens, jobs=2):
-    """`ballaststudy loop` on planted tests, in ``out``, with the scenario folder's config,
-    base parameters and case cache (shared by every loop run there); returns ``out``."""
+    """`ballaststudy loop` on planted tests, in ``out``, with the scenario folder's config
+    (``loop.measurement_sd`` declared from the measured curves, declared_sd: the loop is
+    told the noise the curves carry), base parameters and case cache (shared by every loop
+    run there); returns ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     if not (out / "cases").exists():
         (out / "cases").symlink_to((folder / "cases").resolve())
+    cfg = yaml.safe_load((folder / "config.yaml").read_text())
+    cfg["loop"]["measurement_sd"] = declared_sd(measured)
+    (out / "config.yaml").write_text(yaml.safe_dump(cfg))
     if main(["loop", *map(str, measured), "--conditions", *map(str, conditions), "--specimens", *map(str, specimens),
              "--parameters", str(folder / "base.yaml"), "--out-dir", str(out), "--jobs", str(jobs), "--config",
-             str(folder / "config.yaml"), "--quiet"]):
+             str(out / "config.yaml"), "--quiet"]):
         raise RuntimeError(f"ballaststudy loop refused the planted tests in {out} (its one line above)")
     return out
 

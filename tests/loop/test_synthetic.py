@@ -3,12 +3,13 @@ points within the simulated cycles, spread uniformly in ln N, noise of the state
 the final value - and declared like a real test: conditions and covariates, nothing that
 names the effect or its strength."""
 import numpy as np
+import pytest
 import yaml
 
 from ballaststudy.measured.importer import import_test, load_conditions
 
-from .synthetic import (POINTS, SCENARIO_LIBRARY, SCENARIO_TESTS, PlantedTest, digitise, irreducible_rmse,
-                        library_spec)
+from .synthetic import (NOISE_SHARE, POINTS, SCENARIO_LIBRARY, SCENARIO_TESTS, PlantedTest, declared_sd, digitise,
+                        irreducible_rmse, library_spec)
 
 
 def test_digitised_points_uneven_in_ln_n_with_the_stated_noise():
@@ -95,3 +96,21 @@ def test_no_planted_strength_is_a_grid_set():
         if values:
             grid = design(*_bounds(name), sets, 0)[:, 0]
             assert np.min(np.abs(grid - next(iter(values.values())))) > 1e-3 * np.ptp(grid), name
+
+
+def test_the_declared_measurement_sd_is_the_noise_the_curves_carry(tmp_path):
+    """The loop is told the digitiser's noise of the planted curves: NOISE_SHARE x a curve's
+    final value (median over tests), within 10 % of the sd of the noise digitise added."""
+    rng = np.random.default_rng(5)
+    measured, noise = [], []
+    for j, final in enumerate((4e-5, 5e-5, 7e-5)):
+        curve = final * np.log1p(np.arange(1, 25)) / np.log1p(24)
+        n, v = digitise(curve, rng, NOISE_SHARE, points=(2000, 2000))
+        noise.append(np.std(v - np.interp(np.log(n), np.log(np.arange(1, 25)), curve)))
+        (tmp_path / f"t{j}.dat").write_text("".join(f"{a!r}, {b!r}\n" for a, b in zip(n.tolist(), v.tolist())))
+        (tmp_path / f"t{j}.yaml").write_text(yaml.safe_dump(PlantedTest(30.0, 10.0, 50.0, 5.0).conditions(f"t{j}.dat")))
+        measured.append(tmp_path / f"t{j}.nc")
+        import_test(tmp_path / f"t{j}.yaml", measured[-1])
+    sd = declared_sd(measured)
+    assert sd == pytest.approx(np.median(noise), rel=0.1), (sd, noise)
+    assert sd == pytest.approx(NOISE_SHARE * 5e-5, rel=0.1)
