@@ -13,9 +13,10 @@ extensions = ["myst_parser", "sphinxarg.ext", "reference"]
 myst_enable_extensions = ["dollarmath", "amsmath", "deflist"]
 myst_heading_anchors = 3
 source_suffix = {".md": "markdown"}
-# thesis-scale/parts: the records of the study's parts (their README.md is the study's page);
-# splitting-plan.md: the design notes the splitting stones were built from (a developer's page)
-exclude_patterns = ["_build", "thesis-scale/parts", "stone-models/splitting-plan.md"]
+# thesis-scale/parts, thesis-scale/differences: the records of the study's and the screening's
+# parts (their README.md and differences.md are the pages); splitting-plan.md: the design
+# notes the splitting stones were built from (a developer's page)
+exclude_patterns = ["_build", "thesis-scale/parts", "thesis-scale/differences", "stone-models/splitting-plan.md"]
 html_theme = "pydata_sphinx_theme"
 html_title = "ballaststudy"
 html_theme_options = {"navigation_depth": 2, "show_toc_level": 2}
