@@ -71,9 +71,10 @@ def test_long_term_extrapolates_by_the_given_law():
 
 
 def test_the_verdict_follows_the_rule():
-    row = dict(chosen=False, p=ALPHA / 2 - 1e-3, gain=3.0, mse_cut=2e-8, scatter_mse=1e-8)
+    row = dict(chosen=False, p=ALPHA / 2 - 1e-3, gain=3.0, mse_cut=2e-8, scatter_mse=1e-8, left_mse=1.5e-8)
     assert _verdict_of(row, 2) == "passes, smaller gain"
     assert _verdict_of(row | dict(mse_cut=0.5e-8), 2) == "rejected: held-out cut within the scatter"
+    assert _verdict_of(row | dict(left_mse=2.5e-8), 2) == "rejected: leaves more than it cuts"
     assert _verdict_of(row | dict(gain=-1.0), 2) == "rejected: no gain"
     assert _verdict_of(row | dict(p=ALPHA / 2), 2) == "rejected: gain not consistent across tests"
     assert _verdict_of(row | dict(chosen=True), 2) == "chosen"
@@ -96,7 +97,8 @@ def _chosen_run():
     sampled = Sampled(samples, curves, np.zeros_like(curves), np.full(16, 1 / 16))
     candidate = Candidate(np.array([[0.0], [1.2]]), [], held, (np.array([0.3]), np.array([[0.2, 0.4]]), 100.0),
                           sampled, SimpleNamespace(sets=design + [after]))
-    evidence = dict(gain=5.0, se=1.0, z=5.0, wins=2, tests=2, p=0.01, mse_cut=4e-8, scatter_mse=1e-8)
+    evidence = dict(gain=5.0, se=1.0, z=5.0, wins=2, tests=2, p=0.01, mse_cut=4e-8, scatter_mse=1e-8,
+                    left_mse=0.5e-8)
     selection = Selection({"end_restraint": candidate}, {"end_restraint": evidence}, "end_restraint", after, ["fouling"])
     plain_model = PlainModel(plain, TARGETS.y + 2e-4, HeldOut(np.array([0.5, 1.5]), TARGETS.y + 2e-4, np.zeros((2, 0))))
     covs = {t: 1e-8 * np.eye(int(np.sum(TARGETS.point_test == t))) for t in range(2)}
@@ -149,7 +151,7 @@ def test_a_chosen_effect_in_every_output(tmp_path):
     assert "likelihood: multivariate t with dof = 1 (K - 1:" in text
     assert "16 DEM cases, 14 runs from 10 first loadings (" in text and "; 0.5 min in this run" in text and "**Effect chosen: end_restraint**" in text
     assert f"p < {ALPHA:g} / 1 (candidates)" in text and "| end_restraint | platen_friction 0.3 [0.2, 0.4] (0.19), excludes the no-effect 0.7 |" in text
-    assert "| 0.01 | 2 | - | chosen |" in text     # held-out RMSE, cut / scatter sqrt(4), detectable (2 tests: never), verdict
+    assert "| 0.01 | 2 | - | chosen |" in text     # held-out RMSE, cut / bar sqrt(4), detectable (2 tests: never), verdict
     assert "-> 0.01 % on the fitted tests" in text and "not testable: no target declares VCI" in text
     assert "No accumulation law given" in text and ds.attrs["long_term_law"] == "none"
     assert "N = 1 -> 3 (100 -> 2000 cut at the 3 cycles simulated" in text

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ballaststudy.calibration.bayes import initial_design
-from ballaststudy.calibration.bayes import SHRINK
+from ballaststudy.calibration.bayes import SHRINK, HeldOut
 from ballaststudy.loop.select import (ALPHA, chaos_covariance, choose, held_out_candidate, held_out_plain, judge_candidate,
                                       residual_covariances, residual_dof, scatter_mse)
 
@@ -240,3 +240,23 @@ def test_the_t_rests_on_the_degrees_of_freedom_of_its_covariance():
     for the chaos of M probes of K specimens (the model's own specimens)."""
     assert residual_dof(3) == 2 and residual_dof(6, specimen_share=0.5) == 5
     assert residual_dof(3, specimen_share=0.0) == 3 and residual_dof(4, specimen_share=0.0, probes=3) == 12
+
+
+def test_a_candidate_must_explain_more_than_it_leaves():
+    """Measured curves straying far beyond the scatter (specimens unlike ours): a candidate
+    better on every held-out test, its cut 30 x the scatter, is not chosen while it leaves
+    more squared error than it cuts; the same gains with less left are chosen (the
+    threshold is the larger of the two, not their sum: a cut of 1.2 x what is left passes)."""
+    y = np.zeros(8)
+    plain = HeldOut(np.zeros(8), np.full(8, 1.0), np.zeros((8, 0)))
+    scatter = 1e-2 / 30
+
+    def judged(left_rms):
+        held = HeldOut(np.full(8, 3.0), np.full(8, left_rms), np.zeros((8, 1)))
+        return choose({"soft": (held, plain)}, y, scatter)
+
+    chosen, ev = judged(np.sqrt(0.55))            # cut 0.45 < left 0.55
+    assert chosen is None and ev["soft"]["mse_cut"] > 30 * scatter and ev["soft"]["p"] < ALPHA
+    assert np.isclose(ev["soft"]["left_mse"], 0.55) and np.isclose(ev["soft"]["mse_cut"], 0.45)
+    chosen, ev = judged(np.sqrt(1 / 2.2))         # cut 1.2 / 2.2 > left 1 / 2.2
+    assert chosen == "soft", ev

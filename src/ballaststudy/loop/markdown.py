@@ -7,7 +7,7 @@ from ..calibration.bayes import rmse
 from ..metrics.output import display_scale
 from ..scenario.mapping import mapping_markdown
 from ..scenario.modifiers import MODIFIERS
-from .select import ALPHA, likelihood_words
+from .select import ALPHA, bar_mse, likelihood_words
 from .horizon import STATED_QUANTILE
 from .statistics import SIGNALS
 from .step import LEVEL, STEP_CYCLES
@@ -98,13 +98,16 @@ def _verdict_of(c, candidates):
         return "rejected: gain not consistent across tests"
     if c["gain"] <= 0:
         return "rejected: no gain"
-    return "passes, smaller gain" if c["mse_cut"] > c["scatter_mse"] else "rejected: held-out cut within the scatter"
+    if c["mse_cut"] <= c["scatter_mse"]:
+        return "rejected: held-out cut within the scatter"
+    return "passes, smaller gain" if c["mse_cut"] > bar_mse(c) else "rejected: leaves more than it cuts"
 
 
 def _cut_words(c):
-    """sqrt(cut) / sqrt(scatter): above 1 the cut stands beyond the scatter; a negative cut
-    (the effect predicts worse) keeps its sign."""
-    ratio = c["mse_cut"] / c["scatter_mse"] if c["scatter_mse"] > 0 else np.inf
+    """sqrt(cut) / sqrt(bar) (select.bar_mse): above 1 the cut stands beyond the scatter and
+    beyond what the effect leaves; a negative cut (the effect predicts worse) keeps its sign."""
+    bar = bar_mse(c)
+    ratio = c["mse_cut"] / bar if bar > 0 else np.inf
     return f"{np.sign(ratio) * np.sqrt(abs(ratio)):.2g}"
 
 
@@ -121,15 +124,16 @@ def _candidates(run, stats, scale, unit):
              + f" Rule: one-sided Wilcoxon signed-rank test of the per-test gains, p < {ALPHA:g} / "
              f"{len(cands)} (candidates), and a held-out cut beyond the scatter: the plain model's held-out "
              "mean squared error minus the effect's exceeds the squared residual a correct model expects under "
-             "the noise model (shown as the cut's root over the scatter's); the largest gain among the passing "
-             "is chosen.", "",
+             "the noise model and what the effect itself leaves (its own held-out mean squared error: where the "
+             "measured curves stray beyond our specimens' scatter, the effect must explain more than it leaves; "
+             "shown as the cut's root over the larger's); the largest gain among the passing is chosen.", "",
              "Interval: the 90 % posterior interval, its width over the prior's 90 % (1: the data said "
              "nothing), marked where it runs into an edge of the design range (the data ask for more than the "
              "range allows: no estimate) and where it excludes the effect's no-effect value (the plain model's); an "
              "interval half the prior's width or wider is read as neither. Detectable: the smallest rms effect the rule chooses on this design's "
              "expected data (loop/trust.py; - none in the range).", "",
              "| effect | parameter: fitted mean [90 %] (width / prior's) | gain | SE | tests better | p | held-out RMSE "
-             "| cut / scatter | detectable from | verdict |", "|---|---|---|---|---|---|---|---|---|---|"]
+             "| cut / bar | detectable from | verdict |", "|---|---|---|---|---|---|---|---|---|---|"]
     detect = stats.detectable or {}
     for c in cands:
         par = ", ".join(_interval_words(n, m, iv, note) for n, m, iv, note in

@@ -278,8 +278,14 @@ def scatter_mse(covs, point_test=None, disc=None):
     return float(held_out_variance(covs, point_test, disc).mean())
 
 
+def bar_mse(evidence):
+    """The held-out cut a candidate must exceed (module doc): the scatter the noise model
+    expects, or what the candidate itself leaves of the measured curves where that is more."""
+    return max(evidence["scatter_mse"], evidence["left_mse"])
+
+
 def choose(pairs, y, scatter, tried=None):
-    """(chosen name or None, {name: {gain, se, z, wins, tests, p, mse_cut, scatter_mse}}) by
+    """(chosen name or None, {name: {gain, se, z, wins, tests, p, mse_cut, scatter_mse, left_mse}}) by
     the rule in the module doc; pairs: {name: (the candidate's HeldOut, the plain model's)},
     all under one noise model (so the gains of different candidates are comparable); y the
     measured points; scatter: scatter_mse of that noise model; tried: the candidates the
@@ -292,11 +298,12 @@ def choose(pairs, y, scatter, tried=None):
         gain = float(diff.sum())
         decided = diff[np.abs(diff) >= GAIN_TIE]        # ties dropped, as the signed-rank test does
         p = float(wilcoxon(decided, alternative="greater").pvalue) if decided.size else 1.0
-        cut = float(np.mean((y - plain.predicted) ** 2) - np.mean((y - held.predicted) ** 2))
+        left = float(np.mean((y - held.predicted) ** 2))
         evidence[name] = dict(gain=gain, se=se, z=gain / se if se > 0 else np.inf,
                               wins=int(np.sum(diff >= GAIN_TIE)), tests=len(diff), p=p,
-                              mse_cut=cut, scatter_mse=float(scatter))
+                              mse_cut=float(np.mean((y - plain.predicted) ** 2)) - left, scatter_mse=float(scatter),
+                              left_mse=left)
     passing = {k: v for k, v in evidence.items()
-               if v["gain"] > 0 and v["p"] < ALPHA / (tried or len(pairs)) and v["mse_cut"] > v["scatter_mse"]}
+               if v["gain"] > 0 and v["p"] < ALPHA / (tried or len(pairs)) and v["mse_cut"] > bar_mse(v)}
     chosen = max(passing, key=lambda k: passing[k]["gain"]) if passing else None
     return chosen, evidence
