@@ -7,8 +7,10 @@ rerun when the rule or the stray changes (checkout: it imports the tests' helper
 
     python bench/loop_choice_stray.py [DRAWS]      # default 40
 
-Measured 2026-12-07 (40 draws): nothing planted, chosen 0.00 / 0.03 / 0.03 of the draws (all
-flagged); rate planted, 0.95 / 0.40 / 0.23 (flagged 0.00 / 0.35 / 0.23).
+Measured 2026-12-07 (40 draws; 2 min on one core): nothing planted, chosen 0.00 / 0.00 /
+0.00 of the draws; rate planted, 0.90 / 0.15 / 0.00 (flagged 0.00 / 0.15 / 0.00). Before the
+rule's bar (select.bar_mse, 72eb9aa): 0.00 / 0.03 / 0.03 (all flagged) and 0.95 / 0.40 /
+0.23 (flagged 0.00 / 0.35 / 0.23).
 """
 import sys
 from pathlib import Path

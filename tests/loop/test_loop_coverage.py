@@ -24,10 +24,13 @@ def test_the_intervals_cover_at_their_level_where_the_report_trusts_them(tmp_pat
     intervals are not counted: at the loop's K = 3 on 24-stone specimens that is most truths
     (the full check: docs/loop/inference.md).
 
-    FAILS at the declaration of the noise the curves carry (synthetic.declared_sd; 8dab28c,
+    Failed at the declaration of the noise the curves carry (synthetic.declared_sd; 8dab28c,
     2026-12-07, 21.6 min on 2 cores): false choices 2 of 3 no-effect truths (rate at stray
-    45 x, end restraint at 517 x, both "chosen", read with care); 0 of 0 trusted intervals
-    (all 8 truths' specimens unlike ours). It passed with 1e-5 declared (54dc55a: 1 of 3)."""
+    45 x, end restraint at 517 x, both "chosen", read with care); it passed with 1e-5
+    declared (54dc55a: 1 of 3). With the rule's bar (72eb9aa: the cut must exceed what the
+    candidate leaves; the same truths' runs re-judged from the cache, 7 min): 0 of 3, every
+    verdict "cannot tell". Its coverage clause binds on nothing at this scale: all 8 truths'
+    specimens are called unlike ours (stray 45-3,960 x), 0 intervals trusted."""
     out = tmp_path / "coverage"
     subprocess.run([sys.executable, str(ROOT / "bench/loop_coverage.py"), str(out), "--truths", "8", "--effects",
                     "rate", "end_restraint", "--design-sets", "5", "--cycles", "12", "--pool", "12"],

@@ -94,7 +94,15 @@ The condition is only as good as the scatter it is given: on the planted DEM sce
 fresh truths (bench/loop_undeclared.py --fresh, 24-stone specimens) the loop's 3 specimens
 all strained ~2e-5 in 24 cycles where 24 fresh ones of the same library spread from 1e-5 to
 2.4e-2 (10 above 10x ours), so the scatter from K = 3 was ~1e3 times too small and an effect
-that softens the model still passed (2026-11-27). Small specimens need more of them. Why not "summed gain
+that softens the model still passed (2026-11-27). Small specimens need more of them. So the
+cut must also exceed what the candidate leaves (bar_mse: its own held-out mean squared
+error, where that is more than the scatter): like ours, a right candidate leaves about the
+scatter and nothing changes; where the measured curves stray far beyond our specimens, what
+a candidate leaves measures the scatter the noise model missed, and it must explain more of
+the plain model's held-out error than it leaves (told the digitiser's true noise, the
+scatter alone let rate and end restraint through on no-effect DEM truths straying 45 and
+495 x: each cut 1,200 and 11,000 x the scatter, 0.60 and 0.04 of what it left;
+docs/loop/inference.md). Why not "summed gain
 > 2 standard errors" (SE = sqrt(T var(g)), Vehtari, Gelman & Gabry 2017, reported too): an
 effect whose strength follows a covariate (rate with f) gains little at the low end and a
 lot at the high end, and that spread alone keeps z below 2 with a handful of tests while
