@@ -63,6 +63,15 @@ def test_the_verdicts_classes():
     assert kind == "chosen" and "Read with care" in words
 
 
+def test_the_verdict_writes_its_amounts_in_the_reports_unit():
+    """A strain of 0.039 is 3.9 % in the report's tables: the first line says the same."""
+    seen = dict(smallest=0.039)
+    far = dict(model="plain", ratio=2 * STRAY_LIMIT, rms=0.02, scatter=0.01 / STRAY_LIMIT)
+    assert "rms effect of 3.9 %" in verdict(None, {"a": seen}, ["a"], display=(100.0, "%"))[1]
+    assert "held-out rms 2 % against" in verdict(None, {"a": seen}, ["a"], far, (100.0, "%"))[1]
+    assert "rms effect of 0.039" in verdict(None, {"a": seen}, ["a"])[1]
+
+
 def _stray(offset_sd, seed):
     """specimen_stray of 7 tests whose measured specimen is off by its own offset of sd
     ``offset_sd`` from the model's, with the noise model's noise (SD) on top."""

@@ -13,6 +13,7 @@ import numpy as np
 from ..calibration.bayes import rmse
 from ..inputs import open_netcdf
 from ..measured.importer import load_conditions
+from ..metrics.output import display_scale
 from ..scenario.modifiers import MODIFIERS
 from .accumulation import fit_ensemble, predict
 from .discrepancy import source_name
@@ -88,7 +89,7 @@ def loop_statistics(run):
                        step_models(run), lp["cycles"], lp["measurement_sd"]),
         step_shared=shared_runs(run.plain.runs["cases"]),
         discrepancy=discrepancy_rows(run) if run.noise is not None else [], detectable=detect,
-        verdict=verdict(sel.chosen, detect, list(sel.candidates), stray), stray=stray)
+        verdict=verdict(sel.chosen, detect, list(sel.candidates), stray, display_scale(lp["quantity"])), stray=stray)
 
 
 def step_models(run):

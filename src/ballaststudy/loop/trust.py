@@ -141,15 +141,18 @@ def specimen_stray(run):
                 scatter=scatter)
 
 
-def verdict(chosen, detect, candidates, stray=None):
+def verdict(chosen, detect, candidates, stray=None, display=(1.0, "")):
     """(class, sentence): 'chosen', 'no effect needed', 'cannot tell', or 'no effect needed
     among some, cannot tell for the others' ({effect: detectable row}; candidates: the
     names tried; stray: specimen_stray, beyond STRAY_LIMIT 'cannot tell' where none is
-    chosen, and a chosen effect said to be read with care)."""
+    chosen, and a chosen effect said to be read with care). display: (factor, unit) the
+    sentence's quantities are written in, as the report's tables (metrics.output.display_scale)."""
+    def amount(x):
+        return f"{display[0] * x:.3g}" + (f" {display[1]}" if display[1] else "")
     unlike = stray is not None and stray["ratio"] > STRAY_LIMIT
     words = (f"the measured curves stray from the {stray['model']} model's by {stray['ratio']:.3g} x the scatter "
-             f"of its own specimens (held-out rms {stray['rms']:.3g} against {stray['scatter']:.3g}): specimens "
-             "unlike ours, or an effect no candidate makes") if unlike else ""
+             f"of its own specimens (held-out rms {amount(stray['rms'])} against {amount(stray['scatter'])}): "
+             "specimens unlike ours, or an effect no candidate makes") if unlike else ""
     if chosen:
         return "chosen", f"Effect chosen: {chosen}." + (
             f" Read with care: even with it {words}." if unlike else "")
@@ -163,7 +166,7 @@ def verdict(chosen, detect, candidates, stray=None):
     if not seen:
         return "cannot tell", ("These data cannot tell: no candidate, anywhere in its range, would pass the rule on "
                                "this design's expected data; 'none chosen' says nothing about the effects.")
-    words = "; ".join(f"{n} from an rms effect of {detect[n]['smallest']:.3g}" for n in seen)
+    words = "; ".join(f"{n} from an rms effect of {amount(detect[n]['smallest'])}" for n in seen)
     if not blind:
         return "no effect needed", f"No effect needed: the rule would have chosen {words}; none passed."
     return "partly", (f"No effect needed among {', '.join(seen)} (the rule would have chosen {words}); the data cannot "
