@@ -14,11 +14,13 @@ order and each is written as it ends, so an interrupted run resumes where it sto
 
 Writes OUT/truths.csv (per truth and candidate: the interval, whether it holds the planted
 value or, for a candidate of a truth with nothing planted, does not exclude its no-effect
-value (an interval half the prior's width or wider excludes nothing: loop/trust.py), the choice, the verdict, the
+value (an interval half the prior's width or wider excludes nothing: loop/trust.py), the choice, the
+rule's pick were the curves like ours (`named`: not adopted where they stray), the verdict, the
 smallest detectable effect, how far the truth's specimens stray from the loop's, `unlike`
 beyond loop/trust.py's limit) and OUT/coverage.csv (per planted effect and in all: truths,
 `coverage` of the 90 % intervals with its Clopper-Pearson 90 % interval, the same among the
-truths whose specimens the report did not call unlike ours, `false_choices`,
+truths whose specimens the report did not call unlike ours, `false_choices`, `named_wrong`
+(a wrong pick named, not adopted),
 the planted effect chosen and the smallest planted value chosen, the largest missed, the
 intervals' width over the prior's), and prints the table. Each truth's rows also give the
 candidate's effect size (rms of its fitted curve minus the plain model's).
@@ -38,8 +40,7 @@ import xarray as xr
 import yaml
 from scipy.stats import binomtest
 
-from ballaststudy.loop.select import ALPHA
-from ballaststudy.loop.trust import STRAY_LIMIT
+from ballaststudy.loop.select import ALPHA, STRAY_LIMIT, pick
 from ballaststudy.scenario.modifiers import EFFECTS, MODIFIERS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,6 +93,7 @@ def truth_rows(t, loop_nc):
     with xr.open_dataset(loop_nc) as ds:
         candidates = json.loads(ds.attrs["candidates_json"])
         chosen, kind = ds.attrs["chosen"], ds.attrs["verdict_class"]
+        named = pick({c["effect"]: c for c in candidates}, len(candidates), alike=False) or "none"
         detect = json.loads(ds.attrs["detectable_json"])
         stray = json.loads(ds.attrs.get("specimen_stray_json", "{}")).get("ratio", float("nan"))
         sizes = {name: e["effect_size"] for row in json.loads(ds.attrs["discrepancy_json"])
@@ -109,7 +111,7 @@ def truth_rows(t, loop_nc):
                          against="planted" if planted else ("no_effect" if target is not None else ""),
                          holds="" if target is None else int(lo <= target <= hi if planted
                                                              else not note["excludes_no_effect"]),
-                         chosen=chosen, verdict=kind, effect_size=sizes.get(c["effect"], float("nan")),
+                         chosen=chosen, named=named, verdict=kind, effect_size=sizes.get(c["effect"], float("nan")),
                          detectable=detect.get(c["effect"], {}).get("smallest", float("nan")),
                          stray=stray, unlike=int(stray > STRAY_LIMIT)))
     return rows
@@ -133,6 +135,7 @@ def summary(rows):
         own = [r for r in rows if (g == "all" or r["planted"] == g) and r["against"] == "planted"]
         off = [r for r in rows if (g == "all" or r["planted"] == g) and r["against"] == "no_effect"]
         false = sum(t["chosen"] not in ("none", t["planted"]) for t in ts)
+        named_wrong = sum(t["chosen"] == "none" and t["named"] not in ("none", t["planted"]) for t in ts)
         right = sum(t["chosen"] == t["planted"] for t in ts if t["planted"] != "none")
         k = sum(r["holds"] for r in own)
         lo, hi = _ci(k, len(own))
@@ -144,7 +147,7 @@ def summary(rows):
                         coverage_alike=sum(r["holds"] for r in alike) / len(alike) if alike else float("nan"),
                         no_effect_coverage=sum(r["holds"] for r in off) / len(off) if off else float("nan"),
                         false_choices=false, false_choice_rate=false / len(ts) if ts else float("nan"),
-                        chosen_right=right, width_share=float(np.mean([r["width_share"] for r in own]))
+                        chosen_right=right, named_wrong=named_wrong, width_share=float(np.mean([r["width_share"] for r in own]))
                         if own else float("nan"),
                         none_truths=sum(t["planted"] == "none" for t in ts),
                         smallest_value_chosen=min(chosen_values, default=float("nan")),
@@ -203,4 +206,5 @@ if __name__ == "__main__":
     for r in table:
         print(f"{r['planted']:13s} truths {r['truths']:3d}  coverage {r['coverage']:.2f} [{r['coverage_lo']:.2f}, "
               f"{r['coverage_hi']:.2f}] (specimens alike: {r['coverage_alike']:.2f}, unlike: {r['unlike']})  no-effect coverage {r['no_effect_coverage']:.2f}  false choices "
-              f"{r['false_choices']}/{r['truths']}  chosen right {r['chosen_right']}  width/prior {r['width_share']:.2f}")
+              f"{r['false_choices']}/{r['truths']} (named, not adopted, wrong: {r['named_wrong']})  chosen right "
+              f"{r['chosen_right']}  width/prior {r['width_share']:.2f}")

@@ -19,7 +19,7 @@ from ballaststudy.loop.outcome import LoopRun, PlainModel, Selection, Targets
 from ballaststudy.loop.plots import _panel, plot_curves
 from ballaststudy.loop.report import chosen_doc
 from ballaststudy.loop.discrepancy import make_discrepancy
-from ballaststudy.loop.select import ALPHA, HeldOut, NoiseModel, Sampled, scatter_mse
+from ballaststudy.loop.select import ALPHA, HeldOut, NoiseModel, Sampled, pick, scatter_mse
 from ballaststudy.loop.trust import detectable, discrepancy_rows, specimen_stray, verdict
 from ballaststudy.loop.accumulation import LawFit
 from ballaststudy.loop.horizon import LongTermLaw
@@ -190,13 +190,18 @@ def test_the_long_term_law_in_every_output(tmp_path):
     assert -0.1 < bottom < 0.1 and 0.6 < top < 0.9            # percent: the data span 0.1-0.6 %
 
 
+def _unchosen(run, stats, **evidence):
+    """The chosen run with end_restraint's evidence changed so that the rule passes nothing."""
+    ev = {"end_restraint": run.selection.evidence["end_restraint"] | evidence}
+    run = dataclasses.replace(run, selection=Selection(run.selection.candidates, ev))
+    return run, dataclasses.replace(stats, after=None, candidates=candidate_rows(run.selection, TARGETS),
+                                    long_term_after=None, step=[r | dict(models={"plain": r["models"]["plain"]})
+                                                                for r in stats.step])
+
+
 def test_no_effect_chosen():
-    run, stats = _chosen_run()
-    run = dataclasses.replace(run, selection=Selection(run.selection.candidates, run.selection.evidence))
-    stats = dataclasses.replace(stats, after=None, candidates=candidate_rows(run.selection, TARGETS),
-                                long_term_after=None, step=[r | dict(models={"plain": r["models"]["plain"]})
-                                                            for r in stats.step],
-                                verdict=verdict(None, stats.detectable, ["end_restraint"]))
+    run, stats = _unchosen(*_chosen_run(), p=0.25)                  # 2 tests: the least p there is
+    stats = dataclasses.replace(stats, verdict=verdict(None, stats.detectable, ["end_restraint"]))
     assert stats.verdict[0] == "cannot tell"         # two tests: the signed-rank test can never pass
     assert "**Verdict: These data cannot tell" in report_markdown(run, stats)
     assert chosen_doc(stats, {"mu": 0.5}) == {"effect": "none", "verdict": "cannot tell", "parameters": {},
@@ -207,6 +212,22 @@ def test_no_effect_chosen():
     text = report_markdown(run, stats).split("## DEM horizon")[1].split("\n\n")[2]   # its table
     rows = text.splitlines()[2:]
     assert len(rows) == 2 and all(line.split(" | ")[6] == "-" for line in rows), rows      # not nan
+
+
+def test_a_pick_beyond_the_stray_limit_is_named_not_adopted():
+    """end_restraint passes every condition but the last: what it leaves is 4.5 x the
+    scatter's root. The report names it in the candidates' table and its first lines, the
+    verdict is 'cannot tell', chosen.yaml and loop.nc adopt nothing."""
+    run, stats = _chosen_run()
+    run, stats = _unchosen(run, stats, mse_cut=4e-7, left_mse=2e-7)       # scatter_mse 1e-8
+    far = dict(model="end_restraint", ratio=np.sqrt(20.0), rms=np.sqrt(2e-7), scatter=1e-4)
+    stats = dataclasses.replace(stats, stray=far, verdict=verdict(
+        None, stats.detectable, ["end_restraint"], far, named=pick(run.selection.evidence, 1, alike=False)))
+    text = report_markdown(run, stats)
+    assert stats.verdict[0] == "cannot tell" and "end_restraint passes every other condition" in stats.verdict[1]
+    assert "named, not adopted: even with it the curves stray 4.47 x the scatter" in text
+    assert "**No effect adopted**: end_restraint passes every other condition of the rule" in text
+    assert chosen_doc(stats, {})["effect"] == "none" and loop_dataset(run, stats).attrs["chosen"] == "none"
 
 
 def test_no_candidate_testable(tmp_path):

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from ballaststudy.loop.discrepancy import joint_loglik, make_discrepancy
-from ballaststudy.loop.select import NoiseModel, Sampled, held_out_joint, held_out_plain, residual_dof, scatter_mse
-from ballaststudy.loop.trust import STRAY_LIMIT, detectable, interval_notes, specimen_stray, verdict
+from ballaststudy.loop.select import (STRAY_LIMIT, NoiseModel, Sampled, held_out_joint, held_out_plain, residual_dof,
+                                      scatter_mse)
+from ballaststudy.loop.trust import detectable, interval_notes, specimen_stray, verdict
 
 TESTS, SD = 7, 3e-4
 FREQ = np.array([5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0])
@@ -59,8 +60,8 @@ def test_the_verdicts_classes():
     near = dict(model="plain", ratio=1.0, rms=1.0, scatter=1.0)
     assert verdict(None, {"a": seen}, ["a"], far)[0] == "cannot tell"
     assert verdict(None, {"a": seen}, ["a"], near)[0] == "no effect needed"
-    kind, words = verdict("a", {"a": seen}, ["a"], far)
-    assert kind == "chosen" and "Read with care" in words
+    kind, words = verdict(None, {"a": seen}, ["a"], far, named="a")
+    assert kind == "cannot tell" and "a passes every other condition of the rule: named, not adopted" in words
 
 
 def test_the_verdict_writes_its_amounts_in_the_reports_unit():

@@ -7,11 +7,10 @@ from ..calibration.bayes import rmse
 from ..metrics.output import display_scale
 from ..scenario.mapping import mapping_markdown
 from ..scenario.modifiers import MODIFIERS
-from .select import ALPHA, bar_mse, likelihood_words
+from .select import ALPHA, STRAY_LIMIT, bar_mse, likelihood_words, pick, stray
 from .horizon import STATED_QUANTILE
 from .statistics import SIGNALS
 from .step import LEVEL, STEP_CYCLES
-from .trust import STRAY_LIMIT
 
 
 def report_markdown(run, stats):
@@ -100,7 +99,11 @@ def _verdict_of(c, candidates):
         return "rejected: no gain"
     if c["mse_cut"] <= c["scatter_mse"]:
         return "rejected: held-out cut within the scatter"
-    return "passes, smaller gain" if c["mse_cut"] > bar_mse(c) else "rejected: leaves more than it cuts"
+    if c["mse_cut"] <= bar_mse(c):
+        return "rejected: leaves more than it cuts"
+    if stray(c) > STRAY_LIMIT:
+        return f"named, not adopted: even with it the curves stray {stray(c):.3g} x the scatter"
+    return "passes, smaller gain"
 
 
 def _cut_words(c):
@@ -126,7 +129,10 @@ def _candidates(run, stats, scale, unit):
              "mean squared error minus the effect's exceeds the squared residual a correct model expects under "
              "the noise model and what the effect itself leaves (its own held-out mean squared error: where the "
              "measured curves stray beyond our specimens' scatter, the effect must explain more than it leaves; "
-             "shown as the cut's root over the larger's); the largest gain among the passing is chosen.", "",
+             "shown as the cut's root over the larger's), and what the effect leaves within "
+             f"{STRAY_LIMIT:g} x the scatter's root (beyond, the measured curves are unlike our specimens, the "
+             "likelihood the gains come from does not hold, and the rule's pick is named, not adopted); the largest "
+             "gain among the passing is chosen.", "",
              "Interval: the 90 % posterior interval, its width over the prior's 90 % (1: the data said "
              "nothing), marked where it runs into an edge of the design range (the data ask for more than the "
              "range allows: no estimate) and where it excludes the effect's no-effect value (the plain model's); an "
@@ -205,6 +211,11 @@ def _verdict(run, stats, scale, unit):
     if not run.settings["effects"]:
         return []
     if not chosen:
+        named = pick(run.selection.evidence, len(run.selection.candidates), alike=False)
+        if named:
+            return [f"**No effect adopted**: {named} passes every other condition of the rule, but even with it the "
+                    "measured curves stray beyond the scatter of the model's specimens (above); the model is left "
+                    "unchanged.", ""]
         return ["**No effect chosen**: none beats the plain model on held-out tests consistently enough; "
                 "the model is left unchanged.", ""]
     plain = f"{scale * stats.plain_rmse:.3g}"

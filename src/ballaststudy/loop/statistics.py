@@ -19,6 +19,7 @@ from .accumulation import fit_ensemble, predict
 from .discrepancy import source_name
 from .horizon import measured_curve
 from .residual import covariate_tests, residual, summary
+from .select import pick
 from .step import shared_runs, step_rows
 from .trust import detectable, discrepancy_rows, interval_notes, specimen_stray, verdict
 
@@ -89,7 +90,8 @@ def loop_statistics(run):
                        step_models(run), lp["cycles"], lp["measurement_sd"]),
         step_shared=shared_runs(run.plain.runs["cases"]),
         discrepancy=discrepancy_rows(run) if run.noise is not None else [], detectable=detect,
-        verdict=verdict(sel.chosen, detect, list(sel.candidates), stray, display_scale(lp["quantity"])), stray=stray)
+        verdict=verdict(sel.chosen, detect, list(sel.candidates), stray, display_scale(lp["quantity"]),
+                        pick(sel.evidence, len(sel.candidates), alike=False)), stray=stray)
 
 
 def step_models(run):

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..scenario.modifiers import MODIFIERS
 from .discrepancy import joint_loglik, source_beta
-from .select import choose, held_out_joint, held_out_plain, scatter_mse
+from .select import STRAY_LIMIT, choose, held_out_joint, held_out_plain
 
 GRID = 9            # parameter values per candidate the detectable size is read at
 EDGE_SHARE = 0.02   # an interval end this close to a bound (share of the range) is at the edge
@@ -24,10 +24,6 @@ EDGE_SHARE = 0.02   # an interval end this close to a bound (share of the range)
 # or as pressing on an edge: it says little (a uniform posterior's 90 % interval never holds
 # a bound, and touches one by chance)
 INFORMATIVE = 0.5
-# the held-out rms residual over the root of the scatter the noise model expects, beyond
-# which the measured curves are unlike the model's (specimen_stray: about 1 where they are
-# alike; an rms over P points of a correct model exceeds 3 x its expectation essentially never)
-STRAY_LIMIT = 3.0
 
 
 def _rms(v):
@@ -136,29 +132,29 @@ def specimen_stray(run):
     models = {"plain": run.plain.held, **{name: c.held for name, c in run.selection.candidates.items()}}
     rms = {name: _rms(y - held.predicted) for name, held in models.items()}
     model = chosen or min(rms, key=rms.get)
-    scatter = float(np.sqrt(scatter_mse(noise.plain_covs, run.targets.point_test, noise.disc)))
+    scatter = float(np.sqrt(noise.scatter))
     return dict(model=model, ratio=rms[model] / scatter if scatter > 0 else float("inf"), rms=rms[model],
                 scatter=scatter)
 
 
-def verdict(chosen, detect, candidates, stray=None, display=(1.0, "")):
+def verdict(chosen, detect, candidates, stray=None, display=(1.0, ""), named=None):
     """(class, sentence): 'chosen', 'no effect needed', 'cannot tell', or 'no effect needed
     among some, cannot tell for the others' ({effect: detectable row}; candidates: the
-    names tried; stray: specimen_stray, beyond STRAY_LIMIT 'cannot tell' where none is
-    chosen, and a chosen effect said to be read with care). display: (factor, unit) the
-    sentence's quantities are written in, as the report's tables (metrics.output.display_scale)."""
+    names tried; stray: specimen_stray, beyond STRAY_LIMIT 'cannot tell'; named: the rule's
+    pick were the curves like ours (select.pick, alike=False), named in that sentence, not
+    adopted). display: (factor, unit) the sentence's quantities are written in, as the
+    report's tables (metrics.output.display_scale)."""
     def amount(x):
         return f"{display[0] * x:.3g}" + (f" {display[1]}" if display[1] else "")
-    unlike = stray is not None and stray["ratio"] > STRAY_LIMIT
-    words = (f"the measured curves stray from the {stray['model']} model's by {stray['ratio']:.3g} x the scatter "
-             f"of its own specimens (held-out rms {amount(stray['rms'])} against {amount(stray['scatter'])}): "
-             "specimens unlike ours, or an effect no candidate makes") if unlike else ""
     if chosen:
-        return "chosen", f"Effect chosen: {chosen}." + (
-            f" Read with care: even with it {words}." if unlike else "")
-    if unlike and candidates:
-        return "cannot tell", (f"These data cannot tell: {words}. The intervals rest on specimens like ours and are "
-                               "no evidence for or against an effect.")
+        return "chosen", f"Effect chosen: {chosen}."
+    if stray is not None and stray["ratio"] > STRAY_LIMIT and candidates:
+        return "cannot tell", (
+            f"These data cannot tell: the measured curves stray from the {stray['model']} model's by "
+            f"{stray['ratio']:.3g} x the scatter of its own specimens (held-out rms {amount(stray['rms'])} against "
+            f"{amount(stray['scatter'])}): specimens unlike ours, or an effect no candidate makes. The intervals rest "
+            "on specimens like ours and are no evidence for or against an effect."
+            + (f" {named} passes every other condition of the rule: named, not adopted." if named else ""))
     seen = [n for n in candidates if n in detect and np.isfinite(detect[n]["smallest"])]
     blind = [n for n in candidates if n not in seen]
     if not candidates:
