@@ -26,7 +26,7 @@ intervals' width over the prior's), and prints the table. Each truth's rows also
 candidate's effect size (rms of its fitted curve minus the plain model's).
 
     python bench/loop_coverage.py OUT [--truths 30] [--none-share 0.34] [--cases 3]
-        [--cycles 24] [--design-sets 9] [--pool 24] [--effects rate abrasion ...] [--jobs 2]
+        [--cycles 24] [--design-sets 9] [--pool 24] [--own-share 0] [--effects rate abrasion ...] [--jobs 2]
 """
 import argparse
 import csv
@@ -51,25 +51,30 @@ LEVEL = 0.9
 DEFAULT_EFFECTS = yaml.safe_load((ROOT / "config/config.yaml").read_text())["loop"]["effects"]
 
 
-def truth_plan(n, none_share, effects, pool, seed=0):
-    """[{truth, planted, value, specimens, pool}] of n truths in a shuffled order:
+def truth_plan(n, none_share, effects, pool, seed=0, own_share=0.0, cases=3):
+    """[{truth, planted, value, specimens, source, pool}] of n truths in a shuffled order:
     round(n x none_share) with no effect, the rest cycling through ``effects`` at values
     uniform in their ranges; shared and per-test specimens alternating; fresh specimens
     taken from a pool of ``pool`` in turn (a specimen serves several truths once the pool
-    is used up, never the loop)."""
+    is used up, never the loop); round(n x own_share) of them (source 'own') measured on
+    the loop's own ``cases`` specimens instead, where its noise model holds (a positive
+    control: its intervals should cover there)."""
     rng = np.random.default_rng(seed)
     nones = int(round(n * none_share))
     kinds = ["none"] * nones + [effects[i % len(effects)] for i in range(n - nones)]
     kinds = [kinds[i] for i in rng.permutation(n)]
+    own = set(np.random.default_rng(seed + 1).permutation(n)[:int(round(n * own_share))].tolist())
     plan, taken = [], 0
     for i, planted in enumerate(kinds):
         p = MODIFIERS[planted].parameters[0] if planted != "none" else None
         value = float(rng.uniform(p.low, p.high)) if p else float("nan")
         shared = i % 2 == 0
         width = 1 if shared else len(SCENARIO_TESTS)
+        source = "own" if i in own else "fresh"
+        start, size = (i, cases) if source == "own" else (taken, pool)
         plan.append(dict(truth=i, planted=planted, value=value, specimens="shared" if shared else "per_test",
-                         pool=[(taken + j) % pool for j in range(width)]))
-        taken += width
+                         source=source, pool=[(start + j) % size for j in range(width)]))
+        taken += width if source == "fresh" else 0
     return plan
 
 
@@ -79,7 +84,7 @@ def run_truth(out, t, specimens, fresh, cycles, jobs):
     loop_dir = folder / "loop"
     if (loop_dir / "loop.nc").exists():
         return loop_dir / "loop.nc"
-    mine = [fresh[k] for k in t["pool"]]
+    mine = [(specimens if t.get("source") == "own" else fresh)[k] for k in t["pool"]]
     truth_specimens = mine if t["specimens"] == "shared" else [[s] for s in mine]
     effect = None if t["planted"] == "none" else t["planted"]
     values = {MODIFIERS[effect].parameters[0].name: t["value"]} if effect else {}
@@ -106,6 +111,7 @@ def truth_rows(t, loop_nc):
         # planted effect it may rightly move to mimic it
         target = t["value"] if planted else note["no_effect"] if t["planted"] == "none" else None
         rows.append(dict(truth=t["truth"], planted=t["planted"], value=t["value"], specimens=t["specimens"],
+                         source=t["source"],
                          candidate=c["effect"], mean=c["mean"][0], lo=lo, hi=hi,
                          width_share=note["width_share"], at_edge=note["at_edge"],
                          against="planted" if planted else ("no_effect" if target is not None else ""),
@@ -171,6 +177,8 @@ def parse():
     ap.add_argument("--cycles", type=int, default=24)
     ap.add_argument("--design-sets", type=int, default=9)
     ap.add_argument("--pool", type=int, default=24, help="fresh specimens the truths take in turn")
+    ap.add_argument("--own-share", type=float, default=0.0,
+                    help="share of the truths measured on the loop's own specimens (a positive control)")
     ap.add_argument("--effects", nargs="+", default=DEFAULT_EFFECTS, choices=EFFECTS,
                     help="the candidates (default: the shipped config's loop.effects)")
     ap.add_argument("--jobs", type=int, default=2)
@@ -188,7 +196,8 @@ if __name__ == "__main__":
     fresh, _, _ = scenario_setup(args.out / "fresh", ROOT / "config/config.yaml", args.cases, args.cycles,
                                  args.design_sets, 1.0, refine_rounds=0, assemble=args.cases + args.pool)
     fresh = fresh[args.cases:]                    # the loop's own are cases 0 .. K - 1
-    plan = truth_plan(args.truths, args.none_share, list(args.effects), args.pool)
+    plan = truth_plan(args.truths, args.none_share, list(args.effects), args.pool, own_share=args.own_share,
+                      cases=args.cases)
     rows = []
     t0 = time.time()
     for t in plan:
@@ -197,7 +206,8 @@ if __name__ == "__main__":
         rows += truth_rows(t, loop_nc)
         write_csv(args.out / "truths.csv", rows)
         chosen = rows[-1]["chosen"]
-        print(f"truth {t['truth']:3d} {t['planted']:13s} {t['value']:.3g} ({t['specimens']}): chosen {chosen}, "
+        print(f"truth {t['truth']:3d} {t['planted']:13s} {t['value']:.3g} ({t['source']}, {t['specimens']}): "
+              f"chosen {chosen}, "
               f"verdict {rows[-1]['verdict']} | {(time.time() - start) / 60:.1f} min", flush=True)
     table = summary(rows)
     write_csv(args.out / "coverage.csv", table)
