@@ -59,10 +59,12 @@ def test_the_intervals_cover_at_their_level_where_the_report_trusts_them(tmp_pat
     absorbs - so (c) the GP's white noise fixed at the chaos of a set's mean (the locked
     sets' variance per test) instead of fitted: 1.181 [1.165, 1.196], 1.186 [1.172, 1.198],
     1.189 [1.176, 1.199], and 1.115 [0.896, 1.198] for 1.03 (held): little better. Each
-    prototype monkeypatched into select from the truths' loop.nc, no run. Next to look at:
-    the likelihood's geometry - the truth is one specimen, the sets' means three, and the
-    K = 3 case covariance (2 dof, shrunk) may be narrow in the directions the sets' chaos
-    moves them."""
+    prototype monkeypatched into select from the truths' loop.nc, no run. (d) The case
+    covariances cut to their diagonals: 1.014 [0.562, 1.198] for 0.73 (held), 0.917 [0.896,
+    1.020] for 1.03, 1.190 [1.177, 1.199] and 0.999 [0.887, 1.185] for 0.7: wider on 3 of 4,
+    one held - the K = 3 covariance's directions are part of it, not all. Next: the
+    likelihood's geometry with more specimens (K = 8), where the covariance rests on 7
+    degrees of freedom."""
     out = tmp_path / "coverage"
     subprocess.run([sys.executable, str(ROOT / "bench/loop_coverage.py"), str(out), "--truths", "10", "--effects",
                     "rate", "end_restraint", "--design-sets", "5", "--cycles", "12", "--pool", "12",
