@@ -48,7 +48,7 @@ def run(planted, draws, sd, k=3):
         sc = scatter_mse(plain_covs, pt, disc)
         joint = joint_loglik(y[None] - mean, np.zeros_like(mean), covs, pt, disc, residual_dof(k))
         cand = held_out_joint(GRID, mean, joint, pt, disc)
-        c, ev = choose({"rate": (cand, held)}, y, sc)
+        c, ev = choose({"rate": (cand, held)}, y, {"rate": sc})
         chosen += c is not None
         named += pick(ev, 1, alike=False) is not None
     return chosen / draws, named / draws

@@ -13,7 +13,8 @@ import pytest
 
 from ballaststudy.calibration.bayes import initial_design, per_test_loglik, weighted_fit
 from ballaststudy.loop.discrepancy import loglik, make_discrepancy
-from ballaststudy.loop.select import fit_all, independent_tests, residual_covariances, residual_dof
+from ballaststudy.loop.select import (candidate_covariances, fit_all, independent_tests, residual_covariances,
+                                      residual_dof)
 
 from .test_select import MEAS_SD, SETS, TESTS, _points, _specimens
 
@@ -92,6 +93,48 @@ def test_the_loops_fit_covers_planted_values_on_fresh_specimens():
         hits += interval[0] <= theta <= interval[1]
     print(f"\nfit_all coverage of rate over 20 draws, K = 3: {hits / 20:.2f}")
     assert hits >= 15, hits
+
+
+def scattering_coverage(draws, scale, k=3):
+    """(coverage, mean width over the prior's 90 %) of fit_all's 90 % intervals on rate, each
+    (under the plain model's covariance, under the candidate's own), where the effect makes
+    every specimen scatter ``scale`` x the plain model's (its offsets scaled), the lab
+    specimen too."""
+    hits, width = np.zeros(2), np.zeros(2)
+    for seed in range(draws):
+        rng = np.random.default_rng(3000 + seed)
+        n, point_test = _points(rng)
+        theta = 0.2 + 0.6 * rng.random()
+        y = (_specimens(rng, n, point_test, "rate", theta, 1, scale * rng.normal(0, 0.002, (1, TESTS)))[0]
+             + rng.normal(0, MEAS_SD, len(n)))
+        offsets = rng.normal(0, 0.002, (k, TESTS))
+        plain = _specimens(rng, n, point_test, None, 0.0, k, offsets)
+        thetas = initial_design([0.0], [1.0], SETS, seed=seed + 1)
+        runs = [_specimens(rng, n, point_test, "rate", th[0], k, scale * offsets) for th in thetas]
+        covs, _ = residual_covariances(plain, point_test, MEAS_SD ** 2)
+        for j, fit_covs in enumerate((None, candidate_covariances(runs, point_test, MEAS_SD ** 2, covs))):
+            lo, hi = fit_all(thetas, runs, y, point_test, [0.0], [1.0], covs, dof=residual_dof(k),
+                             fit_covs=fit_covs)[1][0]
+            hits[j] += lo <= theta <= hi
+            width[j] += (hi - lo) / 0.9
+    return hits / draws, width / draws
+
+
+def test_an_effect_that_makes_specimens_scatter_is_fitted_under_its_own_scatter():
+    """Rate, K = 3, 20 draws, the effect's specimens scattering 5 x the plain model's (as
+    real-time loading makes DEM specimens give way: rate's sets scatter 3-9 x the plain
+    model's in strain, docs/loop/inference.md), the lab specimen too. Fitted under the
+    candidate's own covariance (select.candidate_covariances) the intervals widen and hold
+    the planted value in at least 15 of 20 (a 90 % method fails this 1 time in 90).
+    Measured 2026-12-07 over 40 draws: coverage 0.825 under the plain model's covariance,
+    0.975 under the candidate's own, 1.45 x as wide (0.043 and 0.063 of the prior): on this
+    formula model the t's scale absorbs most of the plain covariance's error (0.825 is not
+    significantly below 0.9); on the DEM truths the candidate's own scatter is what made the
+    intervals hold (docs/loop/inference.md)."""
+    (plain, own), (w_plain, w_own) = scattering_coverage(20, 5.0)
+    print(f"\nrate, specimens scattering 5 x under the effect, 20 draws: coverage {plain:.2f} -> {own:.2f}, "
+          f"width/prior {w_plain:.3f} -> {w_own:.3f} (plain model's covariance -> the candidate's own)")
+    assert own >= 0.75 and w_own > 1.2 * w_plain, (plain, own, w_plain, w_own)
 
 
 def _shared_draw(effect, seed, k, shared_sd):

@@ -221,8 +221,9 @@ def test_a_pick_beyond_the_stray_limit_is_named_not_adopted():
     run, stats = _chosen_run()
     run, stats = _unchosen(run, stats, mse_cut=4e-7, left_mse=2e-7)       # scatter_mse 1e-8
     far = dict(model="end_restraint", ratio=np.sqrt(20.0), rms=np.sqrt(2e-7), scatter=1e-4)
-    stats = dataclasses.replace(stats, stray=far, verdict=verdict(
-        None, stats.detectable, ["end_restraint"], far, named=pick(run.selection.evidence, 1, alike=False)))
+    named = pick(run.selection.evidence, 1, alike=False)
+    stats = dataclasses.replace(stats, stray=far, named=named,
+                                verdict=verdict(None, stats.detectable, ["end_restraint"], far, named=named))
     text = report_markdown(run, stats)
     assert stats.verdict[0] == "cannot tell" and "end_restraint passes every other condition" in stats.verdict[1]
     assert "named, not adopted: even with it the curves stray 4.47 x the scatter" in text

@@ -11,8 +11,9 @@ import pytest
 
 from ballaststudy.calibration.bayes import initial_design
 from ballaststudy.calibration.bayes import SHRINK, HeldOut
-from ballaststudy.loop.select import (ALPHA, STRAY_LIMIT, chaos_covariance, choose, held_out_candidate, held_out_plain,
-                                      judge_candidate, pick, residual_covariances, residual_dof, scatter_mse, stray)
+from ballaststudy.loop.select import (ALPHA, STRAY_LIMIT, candidate_covariances, chaos_covariance, choose,
+                                      held_out_candidate, held_out_plain, judge_candidate, pick, residual_covariances,
+                                      residual_dof, scatter_mse, stray)
 
 TESTS = 7
 FREQ = np.array([5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0])     # a declared covariate per test
@@ -47,13 +48,16 @@ def _specimens(rng, n, point_test, effect, theta, k, offsets=None, chaos=2e-4):
     return np.array(out)
 
 
-def _judged(thetas, runs, plain_curves, measured, point_test, noise, dof):
+def _judged(thetas, runs, plain_curves, measured, point_test, noise, dof, share=1.0):
     """The loop's judgement (loop.cli._judge) of every candidate against the plain model."""
     covs, plain_covs = noise
-    judged = {k: judge_candidate(thetas, c, measured, point_test, [0.0], [1.0], covs, dof=dof) for k, c in runs.items()}
+    own = {k: candidate_covariances(c, point_test, MEAS_SD ** 2, covs, share) for k, c in runs.items()}
+    judged = {k: judge_candidate(thetas, c, measured, point_test, [0.0], [1.0], covs, dof=dof, fit_covs=own[k])
+              for k, c in runs.items()}
     held, fits = ({k: j[i] for k, j in judged.items()} for i in (0, 1))
     plain = held_out_plain(plain_curves, measured, point_test, plain_covs, dof)
-    chosen, evidence = choose({k: (held[k], plain) for k in runs}, measured, scatter_mse(plain_covs))
+    chosen, evidence = choose({k: (held[k], plain) for k in runs}, measured,
+                              {k: scatter_mse(own[k]) for k in runs})
     return chosen, evidence, held, plain, fits
 
 
@@ -85,7 +89,7 @@ def _loop_own_specimens(truth, seed, chaos=2e-4, meas_sd=2e-5, offset_sd=0.02):
     runs = {name: [run(name, th[0]) for th in thetas] for name in EFFECTS}
     noise = residual_covariances(plain_curves, point_test, meas_sd ** 2, specimen_share=0.0, probe=probe)
     dof = residual_dof(K, specimen_share=0.0)
-    return (*_judged(thetas, runs, plain_curves, measured, point_test, noise, dof), measured, point_test)
+    return (*_judged(thetas, runs, plain_curves, measured, point_test, noise, dof, 0.0), measured, point_test)
 
 
 @pytest.mark.parametrize("truth", list(EFFECTS))
@@ -187,7 +191,7 @@ def test_an_effect_that_changes_nothing_is_not_chosen():
     covs, _ = residual_covariances(plain_curves, point_test, MEAS_SD ** 2)
     plain = held_out_plain(plain_curves, measured, point_test, covs, residual_dof(K))
     held = held_out_candidate(thetas, runs, measured, point_test, [0.0], [1.0], covs, dof=residual_dof(K))
-    chosen, evidence = choose({"nothing": (held, plain)}, measured, scatter_mse(covs))
+    chosen, evidence = choose({"nothing": (held, plain)}, measured, {"nothing": scatter_mse(covs)})
     assert chosen is None and evidence["nothing"]["wins"] == 0 and evidence["nothing"]["p"] == 1.0
 
 
@@ -253,7 +257,7 @@ def test_a_candidate_must_explain_more_than_it_leaves():
 
     def judged(left_rms):
         held = HeldOut(np.full(8, 3.0), np.full(8, left_rms), np.zeros((8, 1)))
-        return choose({"soft": (held, plain)}, y, scatter)
+        return choose({"soft": (held, plain)}, y, {"soft": scatter})
 
     chosen, ev = judged(np.sqrt(0.55))            # cut 0.45 < left 0.55
     assert chosen is None and ev["soft"]["mse_cut"] > 6 * scatter and ev["soft"]["p"] < ALPHA
@@ -271,8 +275,8 @@ def test_a_pick_that_leaves_the_curves_beyond_the_stray_limit_is_named_not_adopt
     y = np.zeros(8)
     plain = HeldOut(np.zeros(8), np.full(8, 1.0), np.zeros((8, 0)))
     held = HeldOut(np.full(8, 3.0), np.full(8, np.sqrt(0.1)), np.zeros((8, 1)))
-    chosen, ev = choose({"soft": (held, plain)}, y, 0.1 / 8)
+    chosen, ev = choose({"soft": (held, plain)}, y, {"soft": 0.1 / 8})
     assert chosen == "soft" and np.isclose(stray(ev["soft"]), np.sqrt(8))
-    chosen, ev = choose({"soft": (held, plain)}, y, 0.1 / 10)
+    chosen, ev = choose({"soft": (held, plain)}, y, {"soft": 0.1 / 10})
     assert chosen is None and np.isclose(stray(ev["soft"]), np.sqrt(10)) and STRAY_LIMIT == 3
     assert pick(ev, 1, alike=False) == "soft" and pick(ev, 1) is None

@@ -42,6 +42,22 @@ def test_an_effect_that_varies_from_test_to_test_is_detectable_from_about_the_sc
     assert d["passes"][-1] and not d["passes"][0]        # the largest effect passes, none at 0
 
 
+def test_an_effect_whose_specimens_scatter_more_is_detectable_only_beyond_its_own_scatter():
+    """The same rate-like effect, its own specimens scattering 2 x the plain model's (sd; its
+    parameters fitted, its cut judged under that, select.candidate_covariances): the held-out
+    cut must exceed 4 x the squared scatter, so the smallest detectable effect grows towards
+    2 x (the gains, under the one noise model, are the same; measured 1.67 x on the grid of
+    sizes)."""
+    pattern = lambda t, n: 0.004 * FREQ[t] / 60 * np.log(n) / np.log(200)
+    run = _run(pattern)
+    alone = detectable(run)["fouling"]["smallest"]
+    own = {t: 4 * c for t, c in run.noise.covs.items()}
+    run.noise = NoiseModel(run.noise.covs, run.noise.plain_covs, run.noise.disc, run.noise.dof, run.noise.scatter,
+                           {"fouling": own}, {"fouling": scatter_mse(own, run.targets.point_test, run.noise.disc)})
+    wider = detectable(run)["fouling"]["smallest"]
+    assert 1.6 * alone < wider < 2.6 * alone, (alone, wider)
+
+
 def test_an_effect_of_the_discrepancys_shape_is_never_detectable():
     """The same offset in every test: the discrepancy absorbs it at any size."""
     d = detectable(_run(lambda t, n: 0.004 * np.ones_like(n)))["fouling"]

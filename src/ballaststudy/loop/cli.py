@@ -43,8 +43,8 @@ from .discrepancy import make_discrepancy, source_name
 from .horizon import chosen_for
 from .outcome import LoopRun, PlainModel, Selection, Targets
 from .report import write_outputs
-from .select import (NoiseModel, choose, held_out_plain, judge_candidate, residual_covariances, residual_dof,
-                     scatter_mse)
+from .select import (NoiseModel, candidate_covariances, choose, held_out_plain, judge_candidate, residual_covariances,
+                     residual_dof, scatter_mse)
 
 # the chaos probe's velocity perturbation (specimen_share 0): far below any physical speed
 # of the test; the chaos it starts is saturated - runs perturbed by 1e-9, 1e-6 and 1e-4 m/s
@@ -157,17 +157,20 @@ def _refine(runs, plain_at, probe_at, y, point_test, lp, seed, dof, disc):
 
 def _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof, disc):
     """({effect: Candidate}, the plain model's select.HeldOut, select.NoiseModel): every
-    candidate and the plain model under one noise model, made from the plain runs
-    (select.residual_covariances), its t with ``dof`` degrees of freedom, and one
+    candidate and the plain model judged under one noise model, made from the plain runs
+    (select.residual_covariances), each candidate's parameters fitted under its own sets'
+    scatter (select.candidate_covariances), the t with ``dof`` degrees of freedom, and one
     discrepancy per source (discrepancy.Discrepancy ``disc``)."""
-    covs, plain_covs = residual_covariances(plain_at, point_test, lp["measurement_sd"] ** 2, lp["specimen_share"],
-                                            probe_at)
+    measurement_var, share = lp["measurement_sd"] ** 2, lp["specimen_share"]
+    covs, plain_covs = residual_covariances(plain_at, point_test, measurement_var, share, probe_at)
     plain = held_out_plain(plain_at, y, point_test, plain_covs, dof, disc)
-    out = {}
+    out, own = {}, {}
     for name, (thetas, at, evaluate) in runs.items():
-        args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed, dof, disc)
+        own[name] = candidate_covariances(at, point_test, measurement_var, covs, share)
+        args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed, dof, disc, own[name])
         out[name] = Candidate(thetas, at, *judge_candidate(*args), evaluate)
-    return out, plain, NoiseModel(covs, plain_covs, disc, dof, scatter_mse(plain_covs, point_test, disc))
+    return out, plain, NoiseModel(covs, plain_covs, disc, dof, scatter_mse(plain_covs, point_test, disc), own,
+                                  {name: scatter_mse(c, point_test, disc) for name, c in own.items()})
 
 
 def _long_term_law(path, lp):
@@ -223,7 +226,8 @@ def _loop(args):
         disc = make_discrepancy(y, targets.point_cycle, point_test, [source_name(c) for c in conditions],
                                 lp["discrepancy_terms"], lp["discrepancy_prior_sd_share"], plain_at.mean(axis=0))
         candidates, plain, noise = _refine(runs, plain_at, probe_at, y, point_test, lp, cfg["seed"], dof, disc)
-        chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y, noise.scatter)
+        chosen, evidence = choose({k: (c.held, plain) for k, c in candidates.items()}, y,
+                                   {k: noise.scatter_of(k) for k in candidates})
         after = None
         if chosen:
             best = candidates[chosen]

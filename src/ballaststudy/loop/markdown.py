@@ -7,7 +7,7 @@ from ..calibration.bayes import rmse
 from ..metrics.output import display_scale
 from ..scenario.mapping import mapping_markdown
 from ..scenario.modifiers import MODIFIERS
-from .select import ALPHA, STRAY_LIMIT, bar_mse, likelihood_words, pick, stray
+from .select import ALPHA, STRAY_LIMIT, bar_mse, likelihood_words, stray
 from .horizon import STATED_QUANTILE
 from .statistics import SIGNALS
 from .step import LEVEL, STEP_CYCLES
@@ -86,7 +86,9 @@ def _noise_words(run):
                 f"(the chaos probe), plus the measurement's; likelihood: {dof} (K x 1 probe).")
     return (f"the measured specimen scatters like {lp['specimen_share']:g} x one of the plain model's, "
             f"plus 1/K of that for the ensemble mean, plus the measurement's; likelihood: {dof} (K - 1: "
-            "the case-to-case covariance rests on the K specimens every set runs).")
+            "the case-to-case covariance rests on the K specimens every set runs). A candidate's parameter is "
+            "fitted, and what it leaves is measured, under its own sets' case-to-case covariance in place of the "
+            "plain model's (an effect changes how specimens scatter).")
 
 
 def _verdict_of(c, candidates):
@@ -127,7 +129,8 @@ def _candidates(run, stats, scale, unit):
              + f" Rule: one-sided Wilcoxon signed-rank test of the per-test gains, p < {ALPHA:g} / "
              f"{len(cands)} (candidates), and a held-out cut beyond the scatter: the plain model's held-out "
              "mean squared error minus the effect's exceeds the squared residual a correct model expects under "
-             "the noise model and what the effect itself leaves (its own held-out mean squared error: where the "
+             "the effect's own scatter and what the effect itself leaves (its own held-out mean squared error: "
+             "where the "
              "measured curves stray beyond our specimens' scatter, the effect must explain more than it leaves; "
              "shown as the cut's root over the larger's), and what the effect leaves within "
              f"{STRAY_LIMIT:g} x the scatter's root (beyond, the measured curves are unlike our specimens, the "
@@ -163,7 +166,7 @@ def _stray(stats, scale, unit):
     if not s:
         return []
     return [f"The measured curves against the model's own specimens: the {s['model']} model's held-out RMSE "
-            f"{scale * s['rms']:.3g} {unit} over the root of the scatter its noise model expects "
+            f"{scale * s['rms']:.3g} {unit} over the root of the scatter its own specimens leave "
             f"({scale * s['scatter']:.3g} {unit}): **{s['ratio']:.3g}** (about 1 where the measured specimens are "
             f"like the model's; beyond {STRAY_LIMIT:g} they are not, or an effect no candidate makes is there, and the "
             "intervals, which rest on specimens like ours, are no evidence).", ""]
@@ -211,9 +214,9 @@ def _verdict(run, stats, scale, unit):
     if not run.settings["effects"]:
         return []
     if not chosen:
-        named = pick(run.selection.evidence, len(run.selection.candidates), alike=False)
-        if named:
-            return [f"**No effect adopted**: {named} passes every other condition of the rule, but even with it the "
+        if stats.named:
+            return [f"**No effect adopted**: {stats.named} passes every other condition of the rule, but even with "
+                    "it the "
                     "measured curves stray beyond the scatter of the model's specimens (above); the model is left "
                     "unchanged.", ""]
         return ["**No effect chosen**: none beats the plain model on held-out tests consistently enough; "

@@ -21,13 +21,25 @@ K specimens carrying chaos estimate poorly (with the true covariance: 0.90): it 
 12 (t 0.84, normal 0.91) to 24 (0.89, 0.94). No form of the likelihood tried gave it at
 K = 3: stronger shrinkage lowered it (0.18 on the diagonal alone), a t on the specimens'
 part alone (the measurement's variance known) gave 0.44. Every model
-is judged under one noise model, made from the plain model's runs: the noise belongs to
-the measurement, not to a candidate, and only under one noise model are the candidates'
-gains over the plain model comparable (judged each under the scatter pooled with its own
-sets, a candidate whose sets scatter little gained 1e5 nats over a plain model held to
-that narrow noise, and one whose sets make specimens fail drowned every gain: found with
-bench/loop_undeclared.py). The points of a curve are correlated (a specimen is softer or
-stiffer all along): independent points would count one specimen's offset many times over.
+is judged - its held-out gains, the rule's choice - under one noise model, made from the
+plain model's runs: only under one noise model are the candidates' gains over the plain
+model comparable (judged each under the scatter pooled with its own sets, a candidate
+whose sets scatter little gained 1e5 nats over a plain model held to that narrow noise,
+and one whose sets make specimens fail drowned every gain: found with
+bench/loop_undeclared.py). A candidate's parameters are fitted, and what it leaves is
+measured, under its own ensembles' scatter (candidate_covariances): the case-to-case
+covariance of its sets, pooled over the design - an effect changes how specimens scatter,
+not only their mean (real-time loading makes them give way: rate's sets scatter 3-9 x the
+plain model's in strain), and the pooled covariance rests on J x (K - 1) deviations where
+the plain model's rests on K - 1, so its directions are estimated (the case covariance
+cut to its diagonal widened 3 of 4 intervals). Under the plain model's scatter the
+posterior piled on one design set whatever the truth: of the intervals the small coverage
+check trusts, 0 of 5 held at K = 3 and 5 of 7 at K = 8; fitted under the candidate's own
+scatter, 4 of 5 (0.3-0.7 of the prior wide) and 8 of 8 (0.3-1.0: rate's scatter leaves the
+data little to say) - the same runs re-judged, docs/loop/inference.md. The scale
+still rests on K - 1 degrees of freedom: every set runs the same K specimens, so their
+offsets repeat in every set's deviations. The points of a curve are correlated (a
+specimen is softer or stiffer all along): independent points would count one specimen's offset many times over.
 Covariances are shrunk towards their diagonal (calibration.bayes.shrunk) so that they stay
 positive definite with few cases.
 
@@ -117,7 +129,7 @@ lot at the high end, and that spread alone keeps z below 2 with a handful of tes
 every single test is better predicted. The signed-rank test asks what we mean - better
 held-out prediction, condition after condition - and needs at least 6 tests to reach
 0.05 / 3 (all 7 positive: p = 1/128)."""
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import logsumexp
@@ -125,7 +137,7 @@ from scipy.stats import wilcoxon
 
 from ..calibration.bayes import (HeldOut, Surrogate, _box, ensemble_stats, noise_covariances, prior_samples, shrunk,
                                  weighted_fit)
-from .discrepancy import Discrepancy, held_out_variance, joint_loglik, surrogate_shape
+from .discrepancy import Discrepancy, held_out_variance, joint_loglik, loglik, surrogate_shape
 
 ALPHA = 0.05          # family-wise level of the rule over the candidates
 # a per-test gain below half a nat (a Bayes factor under 1.65, "not worth more than a bare
@@ -175,6 +187,17 @@ def residual_covariances(plain, point_test, measurement_var, specimen_share=1.0,
     return covs, plain_covs
 
 
+def candidate_covariances(curves_list, point_test, measurement_var, covs, specimen_share=1.0):
+    """{test: covariance} a candidate's parameters are fitted under (module doc): covs
+    (residual_covariances' first) with the plain ensemble's case-to-case covariance replaced
+    by the candidate's own, pooled over its sets (K_j, P); covs itself for specimen_share 0
+    (the chaos probe is run for the plain model only)."""
+    if specimen_share == 0:
+        return covs
+    k = len(curves_list[0])
+    return noise_covariances(ensemble_stats(curves_list)[1], point_test, specimen_share + 1.0 / k, measurement_var)
+
+
 def residual_dof(k, specimen_share=1.0, probes=1):
     """Degrees of freedom of the likelihood's t (module doc): the scale of the case-to-case
     covariance rests on K - 1 (the K plain specimens, shared by every set), that of the
@@ -189,12 +212,24 @@ def likelihood_words(dof):
 
 @dataclass(frozen=True)
 class NoiseModel:
-    """The one noise model every model of a loop run is judged under."""
+    """The one noise model every model of a loop run is judged under, and the candidates' own
+    scatter their parameters are fitted under (module doc)."""
     covs: dict               # {test: covariance} about a candidate's surrogate (residual_covariances)
     plain_covs: dict         # {test: covariance} about the plain ensemble's mean
     disc: object             # discrepancy.Discrepancy
     dof: float               # the t's degrees of freedom (residual_dof)
     scatter: float           # scatter_mse of the plain covariances and the discrepancy
+    own_covs: dict = field(default_factory=dict)     # {candidate: candidate_covariances}
+    own_scatter: dict = field(default_factory=dict)  # {candidate: scatter_mse of its own_covs}
+
+    def covs_of(self, name):
+        """The covariances candidate ``name``'s parameters are fitted under."""
+        return self.own_covs.get(name, self.covs)
+
+    def scatter_of(self, name):
+        """The scatter a correct model ``name`` (a candidate, or 'plain') leaves on a held-out
+        test: the yardstick of its held-out cut and of its stray."""
+        return self.own_scatter.get(name, self.scatter)
 
 
 def independent_tests(point_test):
@@ -253,14 +288,16 @@ def held_out_joint(samples, mean, joint, point_test, disc):
 
 
 def judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None,
-                    disc=None):
+                    disc=None, fit_covs=None):
     """(held_out_candidate, fit_all, Sampled) of a candidate from one surrogate fit; disc:
-    the discrepancy.Discrepancy (None: independent_tests)."""
+    the discrepancy.Discrepancy (None: independent_tests); fit_covs: the covariances its
+    parameters are fitted under (candidate_covariances; None: covs)."""
     y, point_test = np.asarray(y, float), np.asarray(point_test)
     disc = disc or independent_tests(point_test)
     samples, mean, sd, shape, joint = _sampled(thetas, curves_list, y, point_test, lower, upper, covs, n_samples,
                                                seed, dof, disc)
-    weights, *fit = weighted_fit(samples, joint.full)
+    fit_loglik = joint.full if fit_covs is None else loglik(y[None] - mean, sd, fit_covs, point_test, disc, dof, shape)
+    weights, *fit = weighted_fit(samples, fit_loglik)
     return (held_out_joint(samples, mean, joint, point_test, disc), tuple(fit),
             Sampled(samples, mean, sd, weights, shape))
 
@@ -273,10 +310,12 @@ def held_out_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n
     return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof, disc)[0]
 
 
-def fit_all(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None, disc=None):
+def fit_all(thetas, curves_list, y, point_test, lower, upper, covs, n_samples=4096, seed=0, dof=None, disc=None,
+            fit_covs=None):
     """The candidate's parameter(s) from every test: posterior mean, 90 % interval (d, 2),
-    effective sample size, with the same likelihood as the held-out densities."""
-    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof, disc)[1]
+    effective sample size, under fit_covs (judge_candidate)."""
+    return judge_candidate(thetas, curves_list, y, point_test, lower, upper, covs, n_samples, seed, dof, disc,
+                           fit_covs)[1]
 
 
 def held_out_plain(curves, y, point_test, covs, dof=None, disc=None):
@@ -329,8 +368,9 @@ def choose(pairs, y, scatter, tried=None):
     """(chosen name or None, {name: {gain, se, z, wins, tests, p, mse_cut, scatter_mse, left_mse}}) by
     the rule in the module doc; pairs: {name: (the candidate's HeldOut, the plain model's)},
     all under one noise model (so the gains of different candidates are comparable); y the
-    measured points; scatter: scatter_mse of that noise model; tried: the candidates the
-    Bonferroni correction counts (default: those in pairs)."""
+    measured points; scatter: {name: scatter_mse a correct candidate leaves}
+    (NoiseModel.scatter_of); tried: the candidates the Bonferroni correction counts
+    (default: those in pairs)."""
     y = np.asarray(y, float)
     evidence = {}
     for name, (held, plain) in pairs.items():
@@ -342,6 +382,7 @@ def choose(pairs, y, scatter, tried=None):
         left = float(np.mean((y - held.predicted) ** 2))
         evidence[name] = dict(gain=gain, se=se, z=gain / se if se > 0 else np.inf,
                               wins=int(np.sum(diff >= GAIN_TIE)), tests=len(diff), p=p,
-                              mse_cut=float(np.mean((y - plain.predicted) ** 2)) - left, scatter_mse=float(scatter),
+                              mse_cut=float(np.mean((y - plain.predicted) ** 2)) - left,
+                              scatter_mse=float(scatter[name]),
                               left_mse=left)
     return pick(evidence, tried or len(pairs)), evidence

@@ -57,6 +57,7 @@ class LoopStatistics:
     detectable: dict = None    # trust.detectable: {effect: the smallest effect the rule would choose}
     verdict: tuple = ("", "")  # trust.verdict: (class, sentence)
     stray: dict = None         # trust.specimen_stray: the measured specimens against the model's
+    named: str = None          # the rule's pick were the measured curves like ours (select.pick, alike=False)
 
     @property
     def chosen_row(self):
@@ -78,6 +79,7 @@ def loop_statistics(run):
     beyond = [points_beyond(path, lp["quantity"], lp["cycles"]) for path in run.targets.measured]
     detect = detectable(run) if run.noise is not None else {}
     stray = specimen_stray(run) if run.noise is not None else None
+    named = pick(sel.evidence, len(sel.candidates), alike=False)
     return LoopStatistics(
         before=before, after=after,
         covariates=[r for resp in ("bias", "slope_ln_n") for r in covariate_tests(before, resp, COVARIATES + SIGNALS)],
@@ -90,8 +92,8 @@ def loop_statistics(run):
                        step_models(run), lp["cycles"], lp["measurement_sd"]),
         step_shared=shared_runs(run.plain.runs["cases"]),
         discrepancy=discrepancy_rows(run) if run.noise is not None else [], detectable=detect,
-        verdict=verdict(sel.chosen, detect, list(sel.candidates), stray, display_scale(lp["quantity"]),
-                        pick(sel.evidence, len(sel.candidates), alike=False)), stray=stray)
+        verdict=verdict(sel.chosen, detect, list(sel.candidates), stray, display_scale(lp["quantity"]), named),
+        stray=stray, named=named)
 
 
 def step_models(run):

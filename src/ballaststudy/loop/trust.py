@@ -38,7 +38,7 @@ def discrepancy_rows(run):
     disc = noise.disc
     point_source = disc.test_source[point_test]
     plain = source_beta(y - run.plain.prediction, noise.plain_covs, point_test, disc, noise.dof)
-    under = {name: source_beta(y - c.sampled.curve, noise.covs, point_test, disc, noise.dof)
+    under = {name: source_beta(y - c.sampled.curve, noise.covs_of(name), point_test, disc, noise.dof)
              for name, c in run.selection.candidates.items()}
     rows = []
     for s, source in enumerate(disc.sources):
@@ -101,7 +101,7 @@ def detectable(run):
             joint = joint_loglik(expected[None] - s.mean, s.sd, noise.covs, point_test, noise.disc, noise.dof, s.shape)
             held = held_out_joint(s.samples, s.mean, joint, point_test, noise.disc)
             plain = held_out_plain(plain_mean[None], expected, point_test, noise.plain_covs, noise.dof, noise.disc)
-            chosen, _ = choose({name: (held, plain)}, expected, noise.scatter, tried)
+            chosen, _ = choose({name: (held, plain)}, expected, {name: noise.scatter_of(name)}, tried)
             rows.append((float(s.samples[at, 0]), _rms(expected - plain_mean), chosen == name))
         passing = [size for _, size, ok in rows if ok]
         out[name] = dict(values=[r[0] for r in rows], sizes=[r[1] for r in rows], passes=[r[2] for r in rows],
@@ -113,9 +113,10 @@ def specimen_stray(run):
     """{model, ratio, rms, scatter}: the held-out rms residual of the chosen effect (where
     none is chosen: of the model that predicts the held-out tests best, the plain model or a
     candidate - a plain model missing a real effect strays too; each test predicted with what
-    the other tests of its source say of the discrepancy) over the root of the scatter the
-    noise model expects there (the K specimens', the measurement's, what the other tests
-    leave of the discrepancy). About 1 where the measured curves are like the model's; above
+    the other tests of its source say of the discrepancy) over the root of the scatter that
+    model expects there (its K specimens' - a candidate's pooled over its sets,
+    select.candidate_covariances -, the measurement's, what the other tests leave of the
+    discrepancy). About 1 where the measured curves are like the model's; above
     STRAY_LIMIT they stray far beyond its specimens' scatter - specimens unlike ours, or an
     effect no candidate makes - and the likelihood's noise, which rests on specimens like
     ours, does not hold (the formula model of tests/loop/test_coverage.py, rate planted, 40
@@ -132,7 +133,7 @@ def specimen_stray(run):
     models = {"plain": run.plain.held, **{name: c.held for name, c in run.selection.candidates.items()}}
     rms = {name: _rms(y - held.predicted) for name, held in models.items()}
     model = chosen or min(rms, key=rms.get)
-    scatter = float(np.sqrt(noise.scatter))
+    scatter = float(np.sqrt(noise.scatter_of(model)))
     return dict(model=model, ratio=rms[model] / scatter if scatter > 0 else float("inf"), rms=rms[model],
                 scatter=scatter)
 
