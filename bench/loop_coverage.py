@@ -27,6 +27,7 @@ candidate's effect size (rms of its fitted curve minus the plain model's).
 
     python bench/loop_coverage.py OUT [--truths 30] [--none-share 0.34] [--cases 3]
         [--cycles 24] [--design-sets 9] [--pool 24] [--own-share 0] [--effects rate abrasion ...] [--jobs 2]
+        [--plan-seed 0]    # another seed: other truths on the same specimens (a held-out confirmation)
 """
 import argparse
 import csv
@@ -182,6 +183,7 @@ def parse():
     ap.add_argument("--effects", nargs="+", default=DEFAULT_EFFECTS, choices=EFFECTS,
                     help="the candidates (default: the shipped config's loop.effects)")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--plan-seed", type=int, default=0, help="seed of the truths' plan (effects, values, order)")
     return ap.parse_args()
 
 
@@ -196,8 +198,8 @@ if __name__ == "__main__":
     fresh, _, _ = scenario_setup(args.out / "fresh", ROOT / "config/config.yaml", args.cases, args.cycles,
                                  args.design_sets, 1.0, refine_rounds=0, assemble=args.cases + args.pool)
     fresh = fresh[args.cases:]                    # the loop's own are cases 0 .. K - 1
-    plan = truth_plan(args.truths, args.none_share, list(args.effects), args.pool, own_share=args.own_share,
-                      cases=args.cases)
+    plan = truth_plan(args.truths, args.none_share, list(args.effects), args.pool, seed=args.plan_seed,
+                      own_share=args.own_share, cases=args.cases)
     rows = []
     t0 = time.time()
     for t in plan:

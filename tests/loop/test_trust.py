@@ -118,6 +118,25 @@ def test_specimens_like_ours_do_not_stray_and_unlike_ones_do():
     assert min(_stray(10 * SD, s) for s in range(20)) > STRAY_LIMIT
 
 
+def test_the_stray_is_against_the_scatter_of_the_model_the_run_ends_with():
+    """Specimens off by 10 x the scatter, and a candidate whose own specimens scatter 100 x the
+    plain model's (sd): not chosen, the curves stray against the plain model's scatter
+    whichever model predicts best (its specimens are the ones "no effect needed" speaks
+    for); chosen, against its own, 100 x less."""
+    run = _run(lambda t, n: np.zeros_like(n))
+    rng = np.random.default_rng(0)
+    pt = run.targets.point_test
+    _measured(run, run.plain.prediction + rng.normal(0.0, 10 * SD, TESTS)[pt] + rng.normal(0.0, SD, len(pt)))
+    own = {t: 1e4 * c for t, c in run.noise.covs.items()}
+    run.noise = NoiseModel(run.noise.covs, run.noise.plain_covs, run.noise.disc, run.noise.dof, run.noise.scatter,
+                           {"fouling": own}, {"fouling": scatter_mse(own, pt, run.noise.disc)})
+    unchosen = specimen_stray(run)
+    assert unchosen["model"] == "fouling" and unchosen["ratio"] > STRAY_LIMIT     # the best predictor
+    run.selection.chosen = "fouling"
+    chosen = specimen_stray(run)
+    assert chosen["model"] == "fouling" and chosen["scatter"] == pytest.approx(100 * unchosen["scatter"], rel=0.01)
+
+
 @pytest.mark.parametrize("interval, edge", [([0.195, 0.1999], "high"), ([0.0, 0.03], ""), ([0.05, 0.1], "")])
 def test_an_interval_at_the_edge_of_its_range_is_marked(interval, edge):
     """abrasion's wear_per_cycle is designed over [0, 0.2] (issue 75: 0.198 [0.195, 0.1999]);

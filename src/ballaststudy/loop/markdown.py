@@ -166,7 +166,8 @@ def _stray(stats, scale, unit):
     if not s:
         return []
     return [f"The measured curves against the model's own specimens: the {s['model']} model's held-out RMSE "
-            f"{scale * s['rms']:.3g} {unit} over the root of the scatter its own specimens leave "
+            f"{scale * s['rms']:.3g} {unit} over the root of the scatter the model's specimens leave (the "
+            "chosen effect's own; where none is chosen, the plain model's) "
             f"({scale * s['scatter']:.3g} {unit}): **{s['ratio']:.3g}** (about 1 where the measured specimens are "
             f"like the model's; beyond {STRAY_LIMIT:g} they are not, or an effect no candidate makes is there, and the "
             "intervals, which rest on specimens like ours, are no evidence).", ""]

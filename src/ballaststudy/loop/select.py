@@ -35,7 +35,7 @@ the plain model's rests on K - 1, so its directions are estimated (the case cova
 cut to its diagonal widened 3 of 4 intervals). Under the plain model's scatter the
 posterior piled on one design set whatever the truth: of the intervals the small coverage
 check trusts, 0 of 5 held at K = 3 and 5 of 7 at K = 8; fitted under the candidate's own
-scatter, 4 of 5 (0.3-0.7 of the prior wide) and 8 of 8 (0.3-1.0: rate's scatter leaves the
+scatter, 4 of 5 (0.3-0.7 of the prior wide) and 7 of 7 (0.6-1.0: rate's scatter leaves the
 data little to say) - the same runs re-judged, docs/loop/inference.md. The scale
 still rests on K - 1 degrees of freedom: every set runs the same K specimens, so their
 offsets repeat in every set's deviations. The points of a curve are correlated (a

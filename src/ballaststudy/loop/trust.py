@@ -113,11 +113,14 @@ def specimen_stray(run):
     """{model, ratio, rms, scatter}: the held-out rms residual of the chosen effect (where
     none is chosen: of the model that predicts the held-out tests best, the plain model or a
     candidate - a plain model missing a real effect strays too; each test predicted with what
-    the other tests of its source say of the discrepancy) over the root of the scatter that
-    model expects there (its K specimens' - a candidate's pooled over its sets,
-    select.candidate_covariances -, the measurement's, what the other tests leave of the
-    discrepancy). About 1 where the measured curves are like the model's; above
-    STRAY_LIMIT they stray far beyond its specimens' scatter - specimens unlike ours, or an
+    the other tests of its source say of the discrepancy) over the root of the scatter of the
+    model the run ends with (the K specimens', the measurement's, what the other tests leave
+    of the discrepancy): the chosen effect's own (select.candidate_covariances), where none is
+    chosen the plain model's - its specimens are the ones the report's "no effect needed"
+    speaks for (measured against the best candidate's own instead, a candidate whose sets
+    make specimens give way called fresh specimens straying 132 x alike: rate, the planted
+    abrasion case of bench/loop_undeclared.py). About 1 where the measured curves are like
+    the model's; above STRAY_LIMIT they stray far beyond its specimens' scatter - specimens unlike ours, or an
     effect no candidate makes - and the likelihood's noise, which rests on specimens like
     ours, does not hold (the formula model of tests/loop/test_coverage.py, rate planted, 40
     draws: lab specimens like ours: median 1.04, none beyond, coverage 0.88; 5 x ours: 83 %
@@ -133,7 +136,7 @@ def specimen_stray(run):
     models = {"plain": run.plain.held, **{name: c.held for name, c in run.selection.candidates.items()}}
     rms = {name: _rms(y - held.predicted) for name, held in models.items()}
     model = chosen or min(rms, key=rms.get)
-    scatter = float(np.sqrt(noise.scatter_of(model)))
+    scatter = float(np.sqrt(noise.scatter_of(chosen) if chosen else noise.scatter))
     return dict(model=model, ratio=rms[model] / scatter if scatter > 0 else float("inf"), rms=rms[model],
                 scatter=scatter)
 
@@ -152,8 +155,8 @@ def verdict(chosen, detect, candidates, stray=None, display=(1.0, ""), named=Non
     if stray is not None and stray["ratio"] > STRAY_LIMIT and candidates:
         return "cannot tell", (
             f"These data cannot tell: the measured curves stray from the {stray['model']} model's by "
-            f"{stray['ratio']:.3g} x the scatter of its own specimens (held-out rms {amount(stray['rms'])} against "
-            f"{amount(stray['scatter'])}): specimens unlike ours, or an effect no candidate makes. The intervals rest "
+            f"{stray['ratio']:.3g} x the scatter of the plain model's specimens (held-out rms "
+            f"{amount(stray['rms'])} against {amount(stray['scatter'])}): specimens unlike ours, or an effect no candidate makes. The intervals rest "
             "on specimens like ours and are no evidence for or against an effect."
             + (f" {named} passes every other condition of the rule: named, not adopted." if named else ""))
     seen = [n for n in candidates if n in detect and np.isfinite(detect[n]["smallest"])]
