@@ -57,7 +57,7 @@ def _judged(thetas, runs, plain_curves, measured, point_test, noise, dof, share=
     held, fits = ({k: j[i] for k, j in judged.items()} for i in (0, 1))
     plain = held_out_plain(plain_curves, measured, point_test, plain_covs, dof)
     chosen, evidence = choose({k: (held[k], plain) for k in runs}, measured,
-                              {k: scatter_mse(own[k]) for k in runs})
+                              {k: scatter_mse(own[k] if share > 0 else plain_covs) for k in runs})
     return chosen, evidence, held, plain, fits
 
 
