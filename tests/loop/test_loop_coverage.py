@@ -85,7 +85,10 @@ def test_the_intervals_cover_at_their_level_where_the_report_trusts_them(tmp_pat
     stray 8.8-1,527 x from the plain model's scatter (real-time loading makes our own
     specimens give way), verdict "cannot tell"; 1 trusted interval, held. The clause assumes
     an effect that leaves the specimens' scatter as it is; this plan has one rate truth on
-    our specimens, and it locked (docs/loop/inference.md)."""
+    our specimens, and it locked. --plan-seed 2: its two rate truths on our specimens stray
+    58 and 262 x, the two with nothing planted are alike and hold. Over the three plans: 7
+    of 7 own truths without rate alike, 1 of 6 with rate; 7 of 8 trusted intervals hold
+    (docs/loop/inference.md)."""
     out = tmp_path / "coverage"
     subprocess.run([sys.executable, str(ROOT / "bench/loop_coverage.py"), str(out), "--truths", "10", "--effects",
                     "rate", "end_restraint", "--design-sets", "5", "--cycles", "12", "--pool", "12",
