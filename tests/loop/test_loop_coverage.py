@@ -86,8 +86,8 @@ def test_the_intervals_cover_at_their_level_where_the_report_trusts_them(tmp_pat
     specimens give way), verdict "cannot tell"; 1 trusted interval, held. The clause assumes
     an effect that leaves the specimens' scatter as it is; this plan has one rate truth on
     our specimens, and it locked. --plan-seed 2: its two rate truths on our specimens stray
-    58 and 262 x, the two with nothing planted are alike and hold. Over the three plans: 7
-    of 7 own truths without rate alike, 1 of 6 with rate; 7 of 8 trusted intervals hold
+    58 and 262 x, the two with nothing planted are alike and hold. Over the three plans: 6
+    of 6 own truths without rate alike, 1 of 6 with rate; 7 of 8 trusted intervals hold
     (docs/loop/inference.md)."""
     out = tmp_path / "coverage"
     subprocess.run([sys.executable, str(ROOT / "bench/loop_coverage.py"), str(out), "--truths", "10", "--effects",
