@@ -111,8 +111,9 @@ def scattering_coverage(draws, scale, k=3):
         plain = _specimens(rng, n, point_test, None, 0.0, k, offsets)
         thetas = initial_design([0.0], [1.0], SETS, seed=seed + 1)
         runs = [_specimens(rng, n, point_test, "rate", th[0], k, scale * offsets) for th in thetas]
-        covs, _ = residual_covariances(plain, point_test, MEAS_SD ** 2)
-        for j, fit_covs in enumerate((None, candidate_covariances(runs, point_test, MEAS_SD ** 2, covs))):
+        noise = residual_covariances(plain, point_test, MEAS_SD ** 2)
+        covs = noise[0]
+        for j, fit_covs in enumerate((None, candidate_covariances(runs, point_test, MEAS_SD ** 2, noise)[0])):
             lo, hi = fit_all(thetas, runs, y, point_test, [0.0], [1.0], covs, dof=residual_dof(k),
                              fit_covs=fit_covs)[1][0]
             hits[j] += lo <= theta <= hi

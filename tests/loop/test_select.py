@@ -51,13 +51,13 @@ def _specimens(rng, n, point_test, effect, theta, k, offsets=None, chaos=2e-4):
 def _judged(thetas, runs, plain_curves, measured, point_test, noise, dof, share=1.0):
     """The loop's judgement (loop.cli._judge) of every candidate against the plain model."""
     covs, plain_covs = noise
-    own = {k: candidate_covariances(c, point_test, MEAS_SD ** 2, covs, share) for k, c in runs.items()}
-    judged = {k: judge_candidate(thetas, c, measured, point_test, [0.0], [1.0], covs, dof=dof, fit_covs=own[k])
+    own = {k: candidate_covariances(c, point_test, MEAS_SD ** 2, noise, share) for k, c in runs.items()}
+    judged = {k: judge_candidate(thetas, c, measured, point_test, [0.0], [1.0], covs, dof=dof, fit_covs=own[k][0])
               for k, c in runs.items()}
     held, fits = ({k: j[i] for k, j in judged.items()} for i in (0, 1))
     plain = held_out_plain(plain_curves, measured, point_test, plain_covs, dof)
     chosen, evidence = choose({k: (held[k], plain) for k in runs}, measured,
-                              {k: scatter_mse(own[k] if share > 0 else plain_covs) for k in runs})
+                              {k: scatter_mse(own[k][1]) for k in runs})
     return chosen, evidence, held, plain, fits
 
 

@@ -164,15 +164,12 @@ def _judge(runs, plain_at, probe_at, y, point_test, lp, seed, dof, disc):
     measurement_var, share = lp["measurement_sd"] ** 2, lp["specimen_share"]
     covs, plain_covs = residual_covariances(plain_at, point_test, measurement_var, share, probe_at)
     plain = held_out_plain(plain_at, y, point_test, plain_covs, dof, disc)
-    out, own = {}, {}
+    out, own, own_scatter = {}, {}, {}
     for name, (thetas, at, evaluate) in runs.items():
-        own[name] = candidate_covariances(at, point_test, measurement_var, covs, share)
+        own[name], yardstick = candidate_covariances(at, point_test, measurement_var, (covs, plain_covs), share)
+        own_scatter[name] = scatter_mse(yardstick, point_test, disc)
         args = (thetas, at, y, point_test, *_bounds(name), covs, lp["posterior_samples"], seed, dof, disc, own[name])
         out[name] = Candidate(thetas, at, *judge_candidate(*args), evaluate)
-    # on the model's own specimens (share 0) a candidate's fit keeps the plain chaos, and its
-    # held-out residual carries a chaos draw of the truth and one of its sets: the plain model's
-    # scatter (two draws) stays its yardstick
-    own_scatter = {name: scatter_mse(c, point_test, disc) for name, c in own.items()} if share > 0 else {}
     return out, plain, NoiseModel(covs, plain_covs, disc, dof, scatter_mse(plain_covs, point_test, disc), own,
                                   own_scatter)
 

@@ -187,15 +187,18 @@ def residual_covariances(plain, point_test, measurement_var, specimen_share=1.0,
     return covs, plain_covs
 
 
-def candidate_covariances(curves_list, point_test, measurement_var, covs, specimen_share=1.0):
-    """{test: covariance} a candidate's parameters are fitted under (module doc): covs
-    (residual_covariances' first) with the plain ensemble's case-to-case covariance replaced
-    by the candidate's own, pooled over its sets (K_j, P); covs itself for specimen_share 0
-    (the chaos probe is run for the plain model only)."""
+def candidate_covariances(curves_list, point_test, measurement_var, noise, specimen_share=1.0):
+    """({test: covariance} a candidate's parameters are fitted under, {test: covariance} whose
+    scatter_mse is its yardstick) (module doc), noise: residual_covariances' pair. For a lab
+    specimen both are noise's with the plain ensemble's case-to-case covariance replaced by
+    the candidate's own, pooled over its sets (K_j, P); for specimen_share 0 noise itself
+    (the chaos probe is run for the plain model only; a held-out residual carries a chaos
+    draw of the truth and one of the candidate's sets, as the plain model's two)."""
     if specimen_share == 0:
-        return covs
+        return noise
     k = len(curves_list[0])
-    return noise_covariances(ensemble_stats(curves_list)[1], point_test, specimen_share + 1.0 / k, measurement_var)
+    own = noise_covariances(ensemble_stats(curves_list)[1], point_test, specimen_share + 1.0 / k, measurement_var)
+    return own, own
 
 
 def residual_dof(k, specimen_share=1.0, probes=1):

@@ -156,8 +156,8 @@ def verdict(chosen, detect, candidates, stray=None, display=(1.0, ""), named=Non
         return "cannot tell", (
             f"These data cannot tell: the measured curves stray from the {stray['model']} model's by "
             f"{stray['ratio']:.3g} x the scatter of the plain model's specimens (held-out rms "
-            f"{amount(stray['rms'])} against {amount(stray['scatter'])}): specimens unlike ours, or an effect no candidate makes. The intervals rest "
-            "on specimens like ours and are no evidence for or against an effect."
+            f"{amount(stray['rms'])} against {amount(stray['scatter'])}): specimens unlike ours, or an effect no "
+            "candidate makes. The intervals rest on specimens like ours and are no evidence for or against an effect."
             + (f" {named} passes every other condition of the rule: named, not adopted." if named else ""))
     seen = [n for n in candidates if n in detect and np.isfinite(detect[n]["smallest"])]
     blind = [n for n in candidates if n not in seen]
