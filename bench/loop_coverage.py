@@ -17,7 +17,8 @@ value or, for a candidate of a truth with nothing planted, does not exclude its 
 value (an interval half the prior's width or wider excludes nothing: loop/trust.py), the choice, the
 rule's pick were the curves like ours (`named`: not adopted where they stray), the verdict, the
 smallest detectable effect, how far the truth's specimens stray from the loop's, `unlike`
-beyond loop/trust.py's limit) and OUT/coverage.csv (per planted effect and in all: truths,
+beyond loop/trust.py's limit, `own_stray`: the candidate's held-out rms over the root of its
+own specimens' scatter) and OUT/coverage.csv (per planted effect and in all: truths,
 `coverage` of the 90 % intervals with its Clopper-Pearson 90 % interval, the same among the
 truths whose specimens the report did not call unlike ours, `false_choices`, `named_wrong`
 (a wrong pick named, not adopted),
@@ -41,7 +42,7 @@ import xarray as xr
 import yaml
 from scipy.stats import binomtest
 
-from ballaststudy.loop.select import ALPHA, STRAY_LIMIT, pick
+from ballaststudy.loop.select import ALPHA, STRAY_LIMIT, pick, stray as own_stray
 from ballaststudy.scenario.modifiers import EFFECTS, MODIFIERS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -120,7 +121,7 @@ def truth_rows(t, loop_nc):
                                                              else not note["excludes_no_effect"]),
                          chosen=chosen, named=named, verdict=kind, effect_size=sizes.get(c["effect"], float("nan")),
                          detectable=detect.get(c["effect"], {}).get("smallest", float("nan")),
-                         stray=stray, unlike=int(stray > STRAY_LIMIT)))
+                         stray=stray, unlike=int(stray > STRAY_LIMIT), own_stray=own_stray(c)))
     return rows
 
 

@@ -231,6 +231,22 @@ def test_a_pick_beyond_the_stray_limit_is_named_not_adopted():
     assert chosen_doc(stats, {})["effect"] == "none" and loop_dataset(run, stats).attrs["chosen"] == "none"
 
 
+def test_curves_within_a_candidates_own_scatter_are_said_so():
+    """Curves straying 20 x from the plain model's scatter but 1.5 x from end_restraint's own
+    (trust.specimen_stray's within): the report's stray paragraph and the verdict give that
+    reading beside 'specimens unlike ours'; within the limit, neither mentions it."""
+    run, stats = _chosen_run()
+    run, stats = _unchosen(run, stats, mse_cut=4e-7, left_mse=2e-7)
+    far = dict(model="plain", ratio=20.0, rms=2e-4, scatter=1e-5, within={"end_restraint": 1.5})
+    stats = dataclasses.replace(stats, stray=far, verdict=verdict(None, stats.detectable, ["end_restraint"], far))
+    text = report_markdown(run, stats)
+    assert "end_restraint 1.5 - within the limit" in text
+    assert "within the scatter of end_restraint's own specimens (1.5 x)" in stats.verdict[1]
+    near = far | dict(ratio=1.0)
+    stats = dataclasses.replace(stats, stray=near, verdict=verdict(None, stats.detectable, ["end_restraint"], near))
+    assert "within the limit" not in report_markdown(run, stats) and "own specimens" not in stats.verdict[1]
+
+
 def test_no_candidate_testable(tmp_path):
     """Every effect untestable (no target declares its covariate), or none given: the plain
     model alone, judged and written; no candidate variables in loop.nc."""

@@ -89,7 +89,7 @@ def test_the_verdict_writes_its_amounts_in_the_reports_unit():
     assert "rms effect of 0.039" in verdict(None, {"a": seen}, ["a"])[1]
 
 
-def _stray(offset_sd, seed):
+def _stray(offset_sd, seed, key="ratio"):
     """specimen_stray of 7 tests whose measured specimen is off by its own offset of sd
     ``offset_sd`` from the model's, with the noise model's noise (SD) on top."""
     run = _run(lambda t, n: np.zeros_like(n))
@@ -97,7 +97,7 @@ def _stray(offset_sd, seed):
     pt = run.targets.point_test
     y = run.plain.prediction + rng.normal(0.0, offset_sd, TESTS)[pt] + rng.normal(0.0, SD, len(pt))
     _measured(run, y)
-    return specimen_stray(run)["ratio"]
+    return specimen_stray(run)[key]
 
 
 def _measured(run, y):
@@ -116,6 +116,7 @@ def test_specimens_like_ours_do_not_stray_and_unlike_ones_do():
     alike = [_stray(0.0, s) for s in range(20)]
     assert max(alike) < 1.6 and 0.6 < np.median(alike) < 1.3, alike
     assert min(_stray(10 * SD, s) for s in range(20)) > STRAY_LIMIT
+    assert _stray(10 * SD, 0, "within") == {}     # the candidate's scatter is the plain model's here
 
 
 def test_the_stray_is_against_the_scatter_of_the_model_the_run_ends_with():
@@ -132,6 +133,9 @@ def test_the_stray_is_against_the_scatter_of_the_model_the_run_ends_with():
                            {"fouling": own}, {"fouling": scatter_mse(own, pt, run.noise.disc)})
     unchosen = specimen_stray(run)
     assert unchosen["model"] == "fouling" and unchosen["ratio"] > STRAY_LIMIT     # the best predictor
+    # ... within fouling's own scatter, 100 x the plain model's, and the verdict says so
+    assert unchosen["within"] == {"fouling": pytest.approx(unchosen["ratio"] / 100, rel=0.01)}
+    assert "within the scatter of fouling's own specimens" in verdict(None, {}, ["fouling"], unchosen)[1]
     run.selection.chosen = "fouling"
     chosen = specimen_stray(run)
     assert chosen["model"] == "fouling" and chosen["scatter"] == pytest.approx(100 * unchosen["scatter"], rel=0.01)

@@ -170,7 +170,16 @@ def _stray(stats, scale, unit):
             "chosen effect's own; where none is chosen, the plain model's) "
             f"({scale * s['scatter']:.3g} {unit}): **{s['ratio']:.3g}** (about 1 where the measured specimens are "
             f"like the model's; beyond {STRAY_LIMIT:g} they are not, or an effect no candidate makes is there, and the "
-            "intervals, which rest on specimens like ours, are no evidence).", ""]
+            "intervals, which rest on specimens like ours, are no evidence)." + _within(s), ""]
+
+
+def _within(s):
+    within = s.get("within") or {}
+    if s["ratio"] <= STRAY_LIMIT or not within:
+        return ""
+    return (" Against each candidate's own specimens' scatter (held-out RMSE over its root): "
+            + ", ".join(f"{n} {r:.2g}" for n, r in within.items()) + " - within the limit: the curves scatter as "
+            "that effect's specimens do.")
 
 
 def _interval_words(name, mean, interval, note):
