@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from ballaststudy.loop.discrepancy import joint_loglik, make_discrepancy
-from ballaststudy.loop.select import (STRAY_LIMIT, NoiseModel, Sampled, held_out_joint, held_out_plain, residual_dof,
-                                      scatter_mse)
+from ballaststudy.loop.select import (STRAY_LIMIT, NoiseModel, Sampled, choose, held_out_joint, held_out_plain,
+                                      residual_dof, scatter_mse)
 from ballaststudy.loop.trust import detectable, interval_notes, specimen_stray, verdict
 
 TESTS, SD = 7, 3e-4
@@ -107,6 +107,14 @@ def _measured(run, y):
     run.plain.held = held_out_plain(run.plain.prediction[None], y, pt, noise.plain_covs, noise.dof, noise.disc)
     joint = joint_loglik(y[None] - s.mean, s.sd, noise.covs, pt, noise.disc, noise.dof)
     run.selection.candidates["fouling"].held = held_out_joint(s.samples, s.mean, joint, pt, noise.disc)
+    _judge(run)
+
+
+def _judge(run):
+    """The rule's evidence on the run's measured points, as loop.cli judges them."""
+    cands = run.selection.candidates
+    run.selection.evidence = choose({k: (c.held, run.plain.held) for k, c in cands.items()}, run.targets.y,
+                                    {k: run.noise.scatter_of(k) for k in cands})[1]
 
 
 def test_specimens_like_ours_do_not_stray_and_unlike_ones_do():
@@ -131,6 +139,7 @@ def test_the_stray_is_against_the_scatter_of_the_model_the_run_ends_with():
     own = {t: 1e4 * c for t, c in run.noise.covs.items()}
     run.noise = NoiseModel(run.noise.covs, run.noise.plain_covs, run.noise.disc, run.noise.dof, run.noise.scatter,
                            {"fouling": own}, {"fouling": scatter_mse(own, pt, run.noise.disc)})
+    _judge(run)
     unchosen = specimen_stray(run)
     assert unchosen["model"] == "fouling" and unchosen["ratio"] > STRAY_LIMIT     # the best predictor
     # ... within fouling's own scatter, 100 x the plain model's, and the verdict says so

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..scenario.modifiers import MODIFIERS
 from .discrepancy import joint_loglik, source_beta
-from .select import STRAY_LIMIT, choose, held_out_joint, held_out_plain
+from .select import STRAY_LIMIT, choose, held_out_joint, held_out_plain, stray as candidate_stray
 
 GRID = 9            # parameter values per candidate the detectable size is read at
 EDGE_SHARE = 0.02   # an interval end this close to a bound (share of the range) is at the edge
@@ -133,9 +133,9 @@ def specimen_stray(run):
     no-effect values - a candidate that softens the model explains softer specimens
     whatever their scatter is called.
 
-    within: {candidate: its held-out rms over the root of its own scatter} of the candidates
-    not chosen whose own specimens' scatter holds the curves (at most STRAY_LIMIT): where the
-    plain model's does not, such an effect - one that makes specimens scatter as these do
+    within: {candidate: select.stray of its evidence} of the candidates not chosen whose own
+    specimens' scatter holds the curves (at most STRAY_LIMIT): where the plain model's does
+    not, such an effect - one that makes specimens scatter as these do
     (rate: real-time loading makes them give way) - is one reading of the stray, unlike
     specimens the other (bench/loop_coverage.py, four plans: rate planted on the loop's own
     specimens strays up to 1,500 x from the plain model's scatter, 7 of 8 beyond the limit,
@@ -145,9 +145,9 @@ def specimen_stray(run):
     rms = {name: _rms(y - held.predicted) for name, held in models.items()}
     model = chosen or min(rms, key=rms.get)
     scatter = float(np.sqrt(noise.scatter_of(chosen) if chosen else noise.scatter))
-    own = {name: rms[name] / np.sqrt(noise.scatter_of(name)) for name in run.selection.candidates}
+    own = {name: candidate_stray(run.selection.evidence[name]) for name in run.selection.candidates if name != chosen}
     return dict(model=model, ratio=rms[model] / scatter if scatter > 0 else float("inf"), rms=rms[model],
-                scatter=scatter, within={name: float(r) for name, r in own.items() if r <= STRAY_LIMIT and name != chosen})
+                scatter=scatter, within={name: r for name, r in own.items() if r <= STRAY_LIMIT})
 
 
 def _within_words(within):
