@@ -86,6 +86,27 @@ def test_the_record_is_written_by_the_command(levels, tmp_path):
     assert (again / "differences.csv").read_text() == (tmp_path / "differences.csv").read_text()
 
 
+def test_the_confirmation_is_read_at_its_last_cycle_beside_the_screening(levels, tmp_path):
+    """--confirm: its own table (every case at its last cycle, whatever --at-cycle says of the
+    screening), its verdicts, its curves and its core-hours in the record."""
+    parts, studies = levels
+    args = ["study", "differences", f"flat={parts['flat']}", "--out", str(tmp_path), "--resamples", "200",
+            "--at-cycle", "3", "--confirm", f"jump={parts['jump']}"]
+    assert main(args) == 0
+    md = (tmp_path / "differences.md").read_text()
+    assert "- S(G_1-1) - S(G_1-2), settlement from cycle 0: the jump holds under none of the levels screened." in md
+    assert "- S(G_1-1) - S(G_1-2), settlement from cycle 0: the jump holds under jump." in md
+    assert f"--confirm jump={parts['jump']}" in md and "Core-hours in all: 2.0." in md
+    confirmation = pd.read_csv(tmp_path / "differences_confirmation.csv")
+    row = confirmation[(confirmation.contrast == "S(G_1-1) - S(G_1-2)")].iloc[0]
+    finals = studies["jump"].settlement.sel(database="G_1-1").values[:, -1]
+    assert row.S_fine_m == pytest.approx(finals.mean()) and row.cycles == studies["jump"].sizes["cycle"]
+    assert (tmp_path / "differences_confirmation.png").stat().st_size > 0
+    assert main(["study", "differences", f"flat={parts['flat']}", "--out", str(tmp_path / "o"),
+                 "--confirm", "jump"]) == 2
+    assert not (tmp_path / "o" / "differences.md").exists()
+
+
 def test_a_longer_run_is_read_at_the_screenings_cycle(levels):
     """--at-cycle: each case at that cycle (the planted curves rise linearly to the last)."""
     parts, studies = levels
@@ -117,16 +138,34 @@ def _merged(base, *overlays):
     return cfg
 
 
-@pytest.mark.parametrize("level", sorted(p.stem for p in (ROOT / "config/differences").glob("*.yaml")
-                                          if p.stem != "screening"))
-def test_every_level_is_a_valid_config_with_its_own_results(level, tmp_path):
-    """Each level's overlay on config/thesis.yaml and the screening's is a config the
-    workflow accepts, writing to a folder of its own."""
-    cfg = _merged(ROOT / "config/thesis.yaml", ROOT / "config/differences/screening.yaml",
-                  ROOT / f"config/differences/{level}.yaml")
+def _valid(tmp_path, *files):
+    cfg = _merged(ROOT / "config/thesis.yaml", *(ROOT / f"config/differences/{f}.yaml" for f in files))
     cfg["databases_file"] = str(ROOT / cfg["databases_file"])
     path = tmp_path / "merged.yaml"
     path.write_text(yaml.safe_dump(cfg))
-    load_config(path)
+    return load_config(path)
+
+
+LEVELS = sorted(p.stem for p in (ROOT / "config/differences").glob("*.yaml") if p.stem != "screening"
+                and not p.stem.startswith("confirm_"))
+
+
+@pytest.mark.parametrize("level", LEVELS)
+def test_every_level_is_a_valid_config_with_its_own_results(level, tmp_path):
+    """Each level's overlay on config/thesis.yaml and the screening's is a config the
+    workflow accepts, writing to a folder of its own."""
+    cfg = _valid(tmp_path, "screening", level)
     assert cfg["results_dir"] == f"results/differences/{level}"
     assert set(cfg["databases"]) == {d for pair in CONTRASTS for d in pair} | {REFERENCE}
+
+
+@pytest.mark.parametrize("level", [p.stem.removeprefix("confirm_")
+                                   for p in sorted((ROOT / "config/differences").glob("confirm_*.yaml"))])
+def test_every_confirmation_is_its_level_at_the_thesis_length(level, tmp_path):
+    """confirm_<level>.yaml over its level: the contrasts' databases, >= 10 cases x 1000
+    cycles, in a folder of its own (not the screening's, whose cases it would overwrite)."""
+    assert level in LEVELS
+    cfg = _valid(tmp_path, level, f"confirm_{level}")
+    assert cfg["results_dir"] == f"results/differences/confirm_{level}"
+    assert set(cfg["databases"]) == {d for pair in CONTRASTS for d in pair}
+    assert cfg["study"]["cases_per_database"] >= 10 and cfg["rig"]["box"]["loading"]["cycles"] >= 1000

@@ -37,10 +37,12 @@ def _pairs(items, argument, form, once=False):
 def _study_differences(args):
     writable_dir(args.out)
     command = " ".join(["ballaststudy study differences", *args.levels, "--out", str(args.out),
-                        *([f"--at-cycle {args.at_cycle}"] if args.at_cycle is not None else [])])
+                        *([f"--at-cycle {args.at_cycle}"] if args.at_cycle is not None else []),
+                        *(f"--confirm {c}" for c in args.confirm or ())])
     levels = {k: Path(v) for k, v in _pairs(args.levels, "LEVEL=PART", "LEVEL=PART", once=True).items()}
+    confirm = {k: Path(v) for k, v in _pairs(args.confirm, "--confirm", "LEVEL=PART", once=True).items()}
     for path in write_differences(levels, args.out, command, args.resamples, args.seed,
-                                  args.at_cycle):
+                                  args.at_cycle, confirm):
         print(f"wrote {path}")
 
 
@@ -174,5 +176,8 @@ def register(subparsers):
     d.add_argument("--at-cycle", type=integer(0, 10**9), default=None,
                    help="read every case at this cycle where it ran longer (default: its last), e.g. 299 to read "
                         "the 1000-cycle thesis-scale study beside the 300-cycle screening")
+    d.add_argument("--confirm", action="append", metavar="LEVEL=PART",
+                   help="a confirmation's level and part (config/differences/confirm_<level>.yaml, merged parts), "
+                        "read at its last cycle; repeat for each")
     d.set_defaults(func=_study_differences)
     return st

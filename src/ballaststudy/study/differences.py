@@ -7,7 +7,10 @@ cases, with 90 % bootstrap intervals (cases resampled within databases, as the s
 findings do); each pair under the study's jump rule (optimise.py: S(fine) - JUMP_FACTOR x
 S(neighbour) above 0 with 90 % confidence: the jump holds); box_test's S; the breakage
 rate; the assembly's state (cases with a stage at its guard, the stones' force ratio when
-loading began); the part's core-hours from its provenance records."""
+loading began); the part's core-hours from its provenance records. The confirmation: the
+levels that open a contrast run on the four databases at the thesis' length (10 cases x 1000
+cycles, config/differences/confirm_<level>.yaml), read the same way at their last cycle,
+their settlement curves beside the ends of Fig. 5-1's fine gradings."""
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +31,10 @@ CONTRASTS = (("G_1-1", "G_1-2"), ("G_2-5", "G_2-4"))   # (fine grading, its neig
 REFERENCE = "box_test"
 LEVEL = 0.90
 REFERENCE_LEVEL = "ours"
+# Fig. 5-1's settlement at 1000 cycles of the two fine gradings, read off the figure (issue
+# 73): "far above the rest of their groups" (thesis 5.2; the others end below ~4 mm)
+THESIS_FIG_5_1_END_M = {"G_1-1": 0.030, "G_2-5": 0.006}
+THESIS_CYCLES = 1000
 
 
 def _final(study, name):
@@ -127,19 +134,13 @@ def _mm(v):
     return "" if not np.isfinite(v) else f"{1e3 * v:.2f}"
 
 
-def markdown(table, command):
-    """differences.md: the screening table and a verdict per headline finding."""
-    lines = ["# The thesis' headline under the settings its text allows", "",
-             f"Written by `{command}` from the levels' study parts; regenerate it, do not edit it.", "",
-             f"Contrast: S(fine) - S(neighbour), S the final settlement's mean over cases, {LEVEL:.0%} "
-             "bootstrap interval (cases resampled within databases). Jump rule (the study's finding): "
-             f"S(fine) - {JUMP_FACTOR:g} x S(neighbour) above 0 with {LEVEL:.0%} confidence.", "",
-             "Settlement from cycle 0 is the study's; with the seating it counts from the start of the static "
-             "pre-loading, as the pressing ball's displacement (thesis 4.5.1) would.", "",
-             "| level | settlement | contrast | S fine (mm) | S neighbour (mm) | difference (mm) [90 %] | jump | "
-             "box_test S (mm) | breakage (%) | cases at a guard | force ratio at loading (median / max) | "
-             "cases x cycles | core-h |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+HEADER = ("| level | settlement | contrast | S fine (mm) | S neighbour (mm) | difference (mm) [90 %] | jump | "
+          "box_test S (mm) | breakage (%) | cases at a guard | force ratio at loading (median / max) | "
+          "cases x cycles | core-h |")
+
+
+def _table_lines(table):
+    lines = [HEADER, "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in table.itertuples():
         diff = (f"{_mm(r.difference_m)} [{_mm(r.difference_lo_m)}, {_mm(r.difference_hi_m)}]"
                 if "difference_m" in table and np.isfinite(r.difference_m) else "")
@@ -147,13 +148,39 @@ def markdown(table, command):
                      f"{_mm(getattr(r, 'S_neighbour_m', np.nan))} | {diff} | {r.mark} | {_mm(r.S_box_test_m)} | "
                      f"{r.breakage_rate_pct:.2f} | {r.cases_at_guard} | {r.force_ratio_median:.2g} / "
                      f"{r.force_ratio_max:.2g} | {r.cases} x {r.cycles} | {r.core_hours:.2f} |")
-    lines += ["", "## Verdicts", ""]
+    return lines
+
+
+def _verdicts(table, among):
+    lines = []
     for (contrast, what), rows in table.groupby(["contrast", "settlement"], sort=False):
         held = rows.level[rows.mark == "holds"].tolist()
         lines.append(f"- {contrast}, settlement {what}: the jump " + (
-            f"holds under {', '.join(held)}." if held else "holds under none of the levels screened."))
-    lines += ["", f"Core-hours in all: {table.drop_duplicates('level').core_hours.sum():.1f}.", "",
-              "![contrasts](differences.png)", ""]
+            f"holds under {', '.join(held)}." if held else f"holds under none of the {among}."))
+    return lines
+
+
+def markdown(table, command, confirmation=None):
+    """differences.md: the screening table, the confirmation's where given, and a verdict
+    per headline finding."""
+    lines = ["# The thesis' headline under the settings its text allows", "",
+             f"Written by `{command}` from the levels' study parts; regenerate it, do not edit it.", "",
+             f"Contrast: S(fine) - S(neighbour), S the final settlement's mean over cases, {LEVEL:.0%} "
+             "bootstrap interval (cases resampled within databases). Jump rule (the study's finding): "
+             f"S(fine) - {JUMP_FACTOR:g} x S(neighbour) above 0 with {LEVEL:.0%} confidence.", "",
+             "Settlement from cycle 0 is the study's; with the seating it counts from the start of the static "
+             "pre-loading, as the pressing ball's displacement (thesis 4.5.1) would.", "",
+             *_table_lines(table), "", "## Verdicts", "", *_verdicts(table, "levels screened")]
+    spent = table.drop_duplicates("level").core_hours.sum()
+    if confirmation is not None and len(confirmation):
+        ends = ", ".join(f"{db} {_mm(v)} mm" for db, v in THESIS_FIG_5_1_END_M.items())
+        lines += ["", "## Confirmation at the thesis' length", "",
+                  "The levels confirmed, each on the contrasts' databases at its own cases and cycles, read at "
+                  f"their last cycle. Fig. 5-1's fine gradings end at about {ends} (read off the figure).", "",
+                  *_table_lines(confirmation), "", *_verdicts(confirmation, "levels confirmed"), "",
+                  "![settlement curves](differences_confirmation.png)"]
+        spent += confirmation.drop_duplicates("level").core_hours.sum()
+    lines += ["", f"Core-hours in all: {spent:.1f}.", "", "![contrasts](differences.png)", ""]
     return "\n".join(lines)
 
 
@@ -179,13 +206,52 @@ def figure(table, path):
     return path
 
 
-def write_differences(levels, out_dir, command, n_boot=2000, seed=0, at_cycle=None):
-    """differences.csv, differences.md and differences.png in ``out_dir``; returns the paths."""
+def curves_figure(confirm, path):
+    """Per confirmation level, each contrast database's mean settlement over the cycles with
+    its cases' range, and the ends of Fig. 5-1's fine gradings."""
+    fig = Figure(figsize=(5 * len(confirm), 3.8))
+    FigureCanvasAgg(fig)
+    for k, (level, part) in enumerate(confirm.items()):
+        study, _ = read_level(part)
+        ax = fig.add_subplot(1, len(confirm), k + 1, sharey=fig.axes[0] if k else None)
+        dbs = [str(d) for d in study.database.values]
+        for j, db in enumerate(d for pair in CONTRASTS for d in pair if d in dbs):
+            curves = 1e3 * study.settlement.values[dbs.index(db)]
+            ran = np.isfinite(curves).any(axis=1)
+            n = study.cycle.values + 1
+            ax.plot(n, np.nanmean(curves[ran], axis=0), color=f"C{j}", label=db)
+            ax.fill_between(n, np.nanmin(curves[ran], axis=0), np.nanmax(curves[ran], axis=0), color=f"C{j}",
+                            alpha=0.2, lw=0)
+            if db in THESIS_FIG_5_1_END_M:
+                ax.plot([THESIS_CYCLES], [1e3 * THESIS_FIG_5_1_END_M[db]], marker="*", ms=11, color=f"C{j}", ls="none")
+        ax.set_title(f"{level} (stars: Fig. 5-1's ends)", fontsize=9)
+        ax.set_xlabel("load cycle")
+        ax.set_ylabel("settlement (mm)")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    return path
+
+
+def write_differences(levels, out_dir, command, n_boot=2000, seed=0, at_cycle=None, confirm=None):
+    """differences.csv, differences.md and differences.png in ``out_dir`` from the screening's
+    {level: part}; with ``confirm`` ({level: part} at the thesis' length) also
+    differences_confirmation.csv and .png. Returns the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     table = screening_table(levels, n_boot, seed, at_cycle)
-    with atomic_path(out / "differences.csv") as tmp:
-        table.to_csv(tmp, index=False)
+    confirmation = screening_table(confirm, n_boot, seed) if confirm else None
+    paths = [_csv(table, out / "differences.csv")]
+    if confirm:
+        paths += [_csv(confirmation, out / "differences_confirmation.csv"),
+                  curves_figure(confirm, out / "differences_confirmation.png")]
     with atomic_path(out / "differences.md") as tmp:
-        tmp.write_text(markdown(table, command))
-    return [out / "differences.csv", out / "differences.md", figure(table, out / "differences.png")]
+        tmp.write_text(markdown(table, command, confirmation))
+    return paths + [out / "differences.md", figure(table, out / "differences.png")]
+
+
+def _csv(table, path):
+    with atomic_path(path) as tmp:
+        table.to_csv(tmp, index=False)
+    return path
