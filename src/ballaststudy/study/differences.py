@@ -31,8 +31,8 @@ CONTRASTS = (("G_1-1", "G_1-2"), ("G_2-5", "G_2-4"))   # (fine grading, its neig
 REFERENCE = "box_test"
 LEVEL = 0.90
 REFERENCE_LEVEL = "ours"
-# Fig. 5-1's settlement at 1000 cycles of the two fine gradings, read off the figure (issue
-# 73): "far above the rest of their groups" (thesis 5.2; the others end below ~4 mm)
+# Fig. 5-1's settlement at 1000 cycles of the two fine gradings, as issue 73 reads it off the
+# figure ("far above the rest of their groups", thesis 5.2); the text gives no numbers
 THESIS_FIG_5_1_END_M = {"G_1-1": 0.030, "G_2-5": 0.006}
 THESIS_CYCLES = 1000
 
